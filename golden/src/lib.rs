@@ -1,0 +1,1 @@
+//! Snapshot tests of tiny deterministic scenes live in `tests/`.

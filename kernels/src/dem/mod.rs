@@ -1,0 +1,1 @@
+//! Discrete-element kernels (issue 3): shapes, contact detection, contact and bond laws, integration.

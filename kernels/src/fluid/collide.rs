@@ -1,0 +1,218 @@
+//! Collision operators, node by node.
+//!
+//! * BGK (dissertation eq. 4.1): f_i ← f_i − ω (f_i − f_i^eq(ρ, u)), ω = 1/τ.
+//! * Guo, Zheng & Shi (2002) forcing for a body-force density F (lattice units, force per node):
+//!   u = (Σ f_i c_i + F/2)/ρ and the source S_i = (1 − ω/2) w_i [3 (c_i − u) + 9 (c_i·u) c_i]·F, which adds
+//!   exactly F of momentum per step and no mass.
+//! * Noble & Torczynski (1998) partially-saturated method, PSM (eq. 4.4–4.6):
+//!   f_i ← f_i − (1 − B) ω (f_i − f_i^eq(ρ, u)) + Σ_s B_s Ω^S_{i,s} + (1 − B) S_i,
+//!   Ω^S_{i,s} = f_ī − f_ī^eq(ρ, u) + f_i^eq(ρ, u_s) − f_i  (the "non-equilibrium bounce-back", Ω₁),
+//!   with B the weighting of eq. 4.5, B(ε, τ) = ε(τ − ½)/((1 − ε) + (τ − ½)), or optionally B = ε.
+//!   Several solids s may cover one node; their fractions add and are capped at 1 (ε = min(Σ ε_s, 1)), and the
+//!   total weight B(ε) is shared in proportion to ε_s.
+//!   The momentum each solid receives (eq. 4.7, in lattice units: impulse per step = force) is
+//!   F_s = −B_s Σ_i Ω^S_{i,s} c_i, returned per share so the caller can reduce it to force and torque (eq. 4.8).
+//!   By construction the fluid momentum change at the node is (1 − B) F − Σ_s F_s: momentum is exchanged, never
+//!   created.
+use super::d2q9::{density, equilibrium, momentum, velocity, weights, OPPOSITE, Q};
+use crate::Real;
+
+/// Which weighting function B(ε, τ) the partially-saturated collision uses.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum Weighting {
+    /// Noble & Torczynski's B(ε, τ) = ε(τ − ½)/((1 − ε) + (τ − ½)) (dissertation eq. 4.5). B(0)=0, B(1)=1.
+    #[default]
+    NobleTorczynski,
+    /// B = ε.
+    SolidFraction,
+}
+
+/// The PSM weight B for a (capped) solid fraction `eps` ∈ [0, 1] and relaxation time `tau`.
+#[inline(always)]
+pub fn weighting<T: Real>(kind: Weighting, eps: T, tau: T) -> T {
+    match kind {
+        Weighting::NobleTorczynski => {
+            let a = tau - T::lit(0.5);
+            eps * a / ((T::one() - eps) + a)
+        }
+        Weighting::SolidFraction => eps,
+    }
+}
+
+/// Fluid density and velocity at a node with the Guo half-force shift: u = (Σ f c + F/2)/ρ.
+#[inline(always)]
+pub fn macroscopic<T: Real>(f: &[T; Q], force: [T; 2]) -> (T, [T; 2]) {
+    let rho = density(f);
+    let j = momentum(f);
+    let half = T::lit(0.5);
+    let inv = T::one() / rho;
+    (rho, [(j[0] + half * force[0]) * inv, (j[1] + half * force[1]) * inv])
+}
+
+/// Guo source term S_i (without the (1 − ω/2) prefactor applied twice: this returns the full S_i).
+#[inline(always)]
+pub fn guo_source<T: Real>(omega: T, u: [T; 2], force: [T; 2]) -> [T; Q] {
+    let w = weights::<T>();
+    let pre = T::one() - T::lit(0.5) * omega;
+    let three = T::lit(3.0);
+    let nine = T::lit(9.0);
+    let mut s = [T::zero(); Q];
+    for (i, si) in s.iter_mut().enumerate() {
+        let c = velocity::<T>(i);
+        let cu = c[0] * u[0] + c[1] * u[1];
+        let ax = three * (c[0] - u[0]) + nine * cu * c[0];
+        let ay = three * (c[1] - u[1]) + nine * cu * c[1];
+        *si = pre * w[i] * (ax * force[0] + ay * force[1]);
+    }
+    s
+}
+
+/// BGK collision of one node, in place, without body force. Conserves mass and momentum to roundoff.
+#[inline(always)]
+pub fn bgk_collide<T: Real>(f: &mut [T; Q], omega: T) {
+    let rho = density(f);
+    let j = momentum(f);
+    let inv = T::one() / rho;
+    let feq = equilibrium(rho, [j[0] * inv, j[1] * inv]);
+    for i in 0..Q {
+        f[i] = f[i] - omega * (f[i] - feq[i]);
+    }
+}
+
+/// BGK collision of one node with Guo forcing (force density `force` in lattice units).
+#[inline(always)]
+pub fn bgk_collide_forced<T: Real>(f: &mut [T; Q], omega: T, force: [T; 2]) {
+    let (rho, u) = macroscopic(f, force);
+    let feq = equilibrium(rho, u);
+    let s = guo_source(omega, u, force);
+    for i in 0..Q {
+        f[i] = f[i] - omega * (f[i] - feq[i]) + s[i];
+    }
+}
+
+/// BGK collision over whole structure-of-arrays slices (one slice per direction, all the same length):
+/// the node-local operator applied to every node. No streaming.
+pub fn bgk_collide_slices<T: Real>(planes: [&mut [T]; Q], omega: T, force: [T; 2]) {
+    let [p0, p1, p2, p3, p4, p5, p6, p7, p8] = planes;
+    let n = p0.len();
+    let (p1, p2, p3, p4) = (&mut p1[..n], &mut p2[..n], &mut p3[..n], &mut p4[..n]);
+    let (p5, p6, p7, p8) = (&mut p5[..n], &mut p6[..n], &mut p7[..n], &mut p8[..n]);
+    let forced = force[0] != T::zero() || force[1] != T::zero();
+    for k in 0..n {
+        let mut f = [p0[k], p1[k], p2[k], p3[k], p4[k], p5[k], p6[k], p7[k], p8[k]];
+        if forced {
+            bgk_collide_forced(&mut f, omega, force);
+        } else {
+            bgk_collide(&mut f, omega);
+        }
+        p0[k] = f[0];
+        p1[k] = f[1];
+        p2[k] = f[2];
+        p3[k] = f[3];
+        p4[k] = f[4];
+        p5[k] = f[5];
+        p6[k] = f[6];
+        p7[k] = f[7];
+        p8[k] = f[8];
+    }
+}
+
+/// One solid covering part of a lattice cell: its solid fraction ε_s of the cell and its rigid-body velocity
+/// u_s = V + ω × (x − X) evaluated at the node.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct SolidShare<T> {
+    /// Fraction of the cell area covered by this solid, in [0, 1].
+    pub fraction: T,
+    /// Solid velocity at the node (lattice units).
+    pub velocity: [T; 2],
+}
+
+/// Parameters of the partially-saturated collision.
+#[derive(Clone, Copy, Debug)]
+pub struct PsmParams<T> {
+    /// Relaxation time τ (> ½).
+    pub tau: T,
+    /// Weighting function B.
+    pub weighting: Weighting,
+    /// Body-force density applied to the fluid (weighted by 1 − B at covered nodes).
+    pub force: [T; 2],
+}
+
+/// Noble–Torczynski partially-saturated collision of one node, in place.
+///
+/// `shares` are the solids covering the node; `exchange[s]` receives the momentum handed to solid `s` this
+/// step (force on the solid in lattice units, F_s = −B_s Σ_i Ω^S_{i,s} c_i). `exchange` must be at least as
+/// long as `shares`; extra entries are left untouched. Returns the total weight B used at the node.
+///
+/// With no shares, or all fractions zero, this is bitwise the BGK (or forced BGK) collision.
+#[inline]
+pub fn psm_collide<T: Real>(
+    f: &mut [T; Q],
+    params: &PsmParams<T>,
+    shares: &[SolidShare<T>],
+    exchange: &mut [[T; 2]],
+) -> T {
+    let omega = T::one() / params.tau;
+    let forced = params.force[0] != T::zero() || params.force[1] != T::zero();
+    let mut eps_sum = T::zero();
+    for s in shares {
+        eps_sum += s.fraction;
+    }
+    if eps_sum.partial_cmp(&T::zero()) != Some(core::cmp::Ordering::Greater) {
+        // Uncovered node (or NaN fractions, which we refuse to spread): plain BGK, bitwise.
+        for e in exchange.iter_mut().take(shares.len()) {
+            *e = [T::zero(); 2];
+        }
+        if forced {
+            bgk_collide_forced(f, omega, params.force);
+        } else {
+            bgk_collide(f, omega);
+        }
+        return T::zero();
+    }
+    let eps = if eps_sum > T::one() { T::one() } else { eps_sum };
+    let b_total = weighting(params.weighting, eps, params.tau);
+    let (rho, u) = if forced {
+        macroscopic(f, params.force)
+    } else {
+        let rho = density(f);
+        let j = momentum(f);
+        let inv = T::one() / rho;
+        (rho, [j[0] * inv, j[1] * inv])
+    };
+    let feq = equilibrium(rho, u);
+    // Non-equilibrium bounce-back common to every share: f_ī − f_ī^eq(ρ, u) − f_i.
+    let mut common = [T::zero(); Q];
+    for i in 0..Q {
+        let o = OPPOSITE[i];
+        common[i] = (f[o] - feq[o]) - f[i];
+    }
+    let one_minus_b = T::one() - b_total;
+    let mut post = [T::zero(); Q];
+    for i in 0..Q {
+        post[i] = f[i] - one_minus_b * omega * (f[i] - feq[i]);
+    }
+    if forced {
+        let s = guo_source(omega, u, params.force);
+        for i in 0..Q {
+            post[i] += one_minus_b * s[i];
+        }
+    }
+    for (share, ex) in shares.iter().zip(exchange.iter_mut()) {
+        let b_s = b_total * (share.fraction / eps_sum);
+        let feq_s = equilibrium(rho, share.velocity);
+        let mut mx = T::zero();
+        let mut my = T::zero();
+        for i in 0..Q {
+            let omega_s = common[i] + feq_s[i];
+            let d = b_s * omega_s;
+            post[i] += d;
+            let c = velocity::<T>(i);
+            mx += d * c[0];
+            my += d * c[1];
+        }
+        *ex = [-mx, -my];
+    }
+    *f = post;
+    b_total
+}

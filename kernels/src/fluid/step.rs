@@ -1,0 +1,471 @@
+//! The fused "pull" lattice update over a band of rows: streaming, boundary conditions and collision in one
+//! pass from a source buffer to a destination buffer (two-lattice scheme, 144 bytes moved per f64 update).
+//!
+//! Both buffers hold **post-collision** populations. For each node x of the band:
+//! 1. gather f_i(x) = src_i(x − c_i) (streaming; periodic wrap on periodic axes);
+//! 2. where x − c_i is a solid obstacle node or lies outside a wall side, half-way bounce-back:
+//!    f_i(x) = src_ī(x) (the population that left x towards the wall comes back reversed);
+//! 3. on Zou–He sides, close the unknown incoming populations (see [`super::boundary`]);
+//! 4. collide (BGK, forced BGK, or the partially-saturated operator on covered nodes) and store in dst.
+//!
+//! To keep the hot loop branch-free, the work is split in three passes per band:
+//! * [`bulk_rows`] treats every node as an interior periodic node with one collision operator and no
+//!   branches per node;
+//! * [`fix_special_nodes`] redoes, with the general gather, the nodes listed by [`classify_special_nodes`]
+//!   (edge nodes of non-periodic sides, fluid nodes next to solid obstacle nodes, and the obstacle nodes
+//!   themselves, which are set to the rest equilibrium ρ = 1 so that no garbage is ever stored);
+//! * [`collide_covered_nodes`] redoes the nodes covered by moving solids with the PSM operator and returns the
+//!   momentum exchange per solid share.
+//!
+//! Each pass reads only `src` and writes only the band of `dst`, so bands are independent: splitting the
+//! lattice into bands for threads gives bitwise the same result for any number of threads.
+use super::boundary::{zou_he, zou_he_corner, Boundaries, SideCondition};
+use super::collide::{bgk_collide, bgk_collide_forced, psm_collide, PsmParams, SolidShare};
+use super::d2q9::{density, equilibrium, OPPOSITE, Q};
+use super::lattice::{wrap_row, LatticeShape, Neighbour, Side};
+use crate::Real;
+
+/// Node flag: an ordinary fluid node.
+pub const FLUID: u8 = 0;
+/// Node flag: a fixed solid obstacle node (half-way bounce-back from its fluid neighbours).
+pub const SOLID: u8 = 1;
+
+/// The nine planes of a population buffer as immutable slices, each exactly `shape.nodes()` long.
+pub fn planes<'a, T>(shape: &LatticeShape, buf: &'a [T]) -> [&'a [T]; Q] {
+    let n = shape.nodes();
+    core::array::from_fn(|q| &buf[q * shape.stride..q * shape.stride + n])
+}
+
+/// The nine planes of a population buffer as mutable slices, each exactly `shape.nodes()` long.
+pub fn planes_mut<'a, T>(shape: &LatticeShape, buf: &'a mut [T]) -> [&'a mut [T]; Q] {
+    let n = shape.nodes();
+    let mut rest = buf;
+    let mut out: [&'a mut [T]; Q] = Default::default();
+    for slot in out.iter_mut() {
+        // The stride is ≥ n, and the buffer holds Q strides, so every split is in bounds.
+        let (head, tail) = core::mem::take(&mut rest).split_at_mut(shape.stride);
+        *slot = &mut head[..n];
+        rest = tail;
+    }
+    out
+}
+
+/// The rows `y0..y1` of each plane of `planes`, as a band for [`step_band`].
+pub fn band_mut<'a, T>(
+    shape: &LatticeShape,
+    planes: [&'a mut [T]; Q],
+    y0: usize,
+    y1: usize,
+) -> [&'a mut [T]; Q] {
+    let (a, b) = (y0 * shape.nx, y1 * shape.nx);
+    planes.map(|p| &mut p[a..b])
+}
+
+/// Populations at node `index` of a buffer.
+#[inline(always)]
+pub fn load<T: Real>(shape: &LatticeShape, buf: &[T], index: usize) -> [T; Q] {
+    core::array::from_fn(|q| buf[q * shape.stride + index])
+}
+
+/// Density and velocity (with the Guo half-force shift) of every node, from a post-collision buffer: the
+/// moments of the populations after streaming, which is what the next collision sees.
+pub fn gathered_moments<T: Real>(
+    shape: &LatticeShape,
+    src: &[T],
+    bc: &Boundaries<T>,
+    flags: &[u8],
+    force: [T; 2],
+    rho_out: &mut [T],
+    u_out: &mut [[T; 2]],
+) {
+    for y in 0..shape.ny {
+        for x in 0..shape.nx {
+            let n = shape.index(x, y);
+            if flags[n] == SOLID {
+                rho_out[n] = T::one();
+                u_out[n] = [T::zero(); 2];
+                continue;
+            }
+            let f = gather_node(shape, src, bc, flags, x, y);
+            let (rho, u) = super::collide::macroscopic(&f, force);
+            rho_out[n] = rho;
+            u_out[n] = u;
+        }
+    }
+}
+
+/// The general gather at node (x, y): streaming with periodic wrap, half-way bounce-back from solid obstacle
+/// nodes and wall sides, and the Zou–He closures of Zou–He sides (including corners).
+#[inline]
+pub fn gather_node<T: Real>(
+    shape: &LatticeShape,
+    src: &[T],
+    bc: &Boundaries<T>,
+    flags: &[u8],
+    x: usize,
+    y: usize,
+) -> [T; Q] {
+    let periodic = bc.periodic_axes();
+    let here = shape.index(x, y);
+    let mut f = [T::zero(); Q];
+    for (q, fq) in f.iter_mut().enumerate() {
+        match shape.upstream(x, y, q, periodic) {
+            Neighbour::Node(j) => {
+                *fq = if flags[j] == SOLID {
+                    src[shape.offset(OPPOSITE[q], here)]
+                } else {
+                    src[shape.offset(q, j)]
+                };
+            }
+            Neighbour::Outside { .. } => {
+                // Through a wall side: half-way bounce-back. Through a Zou–He side the population is unknown;
+                // it is provisionally bounced back too and the closure below overwrites it.
+                *fq = src[shape.offset(OPPOSITE[q], here)];
+            }
+        }
+    }
+    close_edges(shape, src, bc, flags, x, y, &mut f);
+    f
+}
+
+/// Apply Zou–He closures to the gathered populations of an edge node.
+#[inline]
+fn close_edges<T: Real>(
+    shape: &LatticeShape,
+    src: &[T],
+    bc: &Boundaries<T>,
+    flags: &[u8],
+    x: usize,
+    y: usize,
+    f: &mut [T; Q],
+) {
+    let xs = if x == 0 && bc.west.is_zou_he() {
+        Some(Side::West)
+    } else if x + 1 == shape.nx && bc.east.is_zou_he() {
+        Some(Side::East)
+    } else {
+        None
+    };
+    let ys = if y == 0 && bc.south.is_zou_he() {
+        Some(Side::South)
+    } else if y + 1 == shape.ny && bc.north.is_zou_he() {
+        Some(Side::North)
+    } else {
+        None
+    };
+    match (xs, ys) {
+        (Some(s), None) => zou_he(f, s, bc.side(s)),
+        (None, Some(s)) => zou_he(f, s, bc.side(s)),
+        (Some(sx), Some(sy)) => {
+            let (cx, cy) = (bc.side(sx), bc.side(sy));
+            let rho = match (cx, cy) {
+                (SideCondition::Pressure { density: a }, SideCondition::Pressure { density: b }) => {
+                    T::lit(0.5) * (a + b)
+                }
+                (SideCondition::Pressure { density }, _) | (_, SideCondition::Pressure { density }) => {
+                    density
+                }
+                _ => {
+                    // Two velocity sides: density of the diagonal interior neighbour (post-collision sum).
+                    let ix = if sx == Side::West { x + 1 } else { x.saturating_sub(1) };
+                    let iy = if sy == Side::South { y + 1 } else { y.saturating_sub(1) };
+                    let (ix, iy) = (ix.min(shape.nx - 1), iy.min(shape.ny - 1));
+                    let j = shape.index(ix, iy);
+                    if flags[j] == SOLID {
+                        T::one()
+                    } else {
+                        density(&load(shape, src, j))
+                    }
+                }
+            };
+            let u = match (cx, cy) {
+                (SideCondition::Velocity { velocity }, _) | (_, SideCondition::Velocity { velocity }) => {
+                    velocity
+                }
+                _ => [T::zero(); 2],
+            };
+            zou_he_corner(f, sx, sy, rho, u);
+        }
+        (None, None) => {}
+    }
+}
+
+/// List, in increasing order, the nodes that the branch-free bulk pass gets wrong and [`fix_special_nodes`]
+/// must redo: solid obstacle nodes, nodes on non-periodic sides, and fluid nodes with a solid upstream
+/// neighbour. Writes into `out` (at most `shape.nodes()` entries are needed) and returns the count written;
+/// stops early (returning `out.len()`) if `out` is too short.
+pub fn classify_special_nodes<T: Real>(
+    shape: &LatticeShape,
+    bc: &Boundaries<T>,
+    flags: &[u8],
+    out: &mut [u32],
+) -> usize {
+    let periodic = bc.periodic_axes();
+    let mut count = 0;
+    for y in 0..shape.ny {
+        for x in 0..shape.nx {
+            let n = shape.index(x, y);
+            let mut special = flags[n] == SOLID
+                || (!periodic[0] && (x == 0 || x + 1 == shape.nx))
+                || (!periodic[1] && (y == 0 || y + 1 == shape.ny));
+            if !special {
+                for q in 1..Q {
+                    if let Neighbour::Node(j) = shape.upstream(x, y, q, periodic) {
+                        if flags[j] == SOLID {
+                            special = true;
+                            break;
+                        }
+                    }
+                }
+            }
+            if special {
+                if count >= out.len() {
+                    return count;
+                }
+                out[count] = n as u32;
+                count += 1;
+            }
+        }
+    }
+    count
+}
+
+/// Pull one node from `src` assuming a fully periodic lattice (used for the first and last column of the bulk).
+#[inline(always)]
+fn pull_periodic<T: Real>(shape: &LatticeShape, src: &[&[T]; Q], x: usize, y: usize) -> [T; Q] {
+    let nx = shape.nx;
+    let xm = if x == 0 { nx - 1 } else { x - 1 };
+    let xp = if x + 1 >= nx { 0 } else { x + 1 };
+    let ym = wrap_row(y, -1, shape.ny) * nx;
+    let yp = wrap_row(y, 1, shape.ny) * nx;
+    let y0 = y * nx;
+    [
+        src[0][y0 + x],
+        src[1][y0 + xm],
+        src[2][ym + x],
+        src[3][y0 + xp],
+        src[4][yp + x],
+        src[5][ym + xm],
+        src[6][ym + xp],
+        src[7][yp + xp],
+        src[8][yp + xm],
+    ]
+}
+
+/// The branch-free bulk pass over rows `y0..y1`: periodic pull + `collide` for every node, written into the
+/// band `dst` (each plane slice holds rows y0..y1). `collide` is applied in place to the gathered populations.
+#[inline]
+pub fn bulk_rows<T: Real, C: Fn(&mut [T; Q])>(
+    shape: &LatticeShape,
+    src: &[T],
+    dst: &mut [&mut [T]; Q],
+    y0: usize,
+    y1: usize,
+    collide: C,
+) {
+    let s = planes(shape, src);
+    let nx = shape.nx;
+    for y in y0..y1 {
+        let row = (y - y0) * nx;
+        // Edge columns (x = 0, x = nx − 1) with wrap.
+        for x in [0, nx - 1] {
+            let mut f = pull_periodic(shape, &s, x, y);
+            collide(&mut f);
+            for q in 0..Q {
+                dst[q][row + x] = f[q];
+            }
+            if nx == 1 {
+                break;
+            }
+        }
+        if nx < 3 {
+            continue;
+        }
+        let n = nx - 2;
+        let r0 = y * nx;
+        let rm = wrap_row(y, -1, shape.ny) * nx;
+        let rp = wrap_row(y, 1, shape.ny) * nx;
+        // Source slices, each exactly n long: f_i(x) = src_i(x − c_i) for x in 1..nx−1.
+        let s0 = &s[0][r0 + 1..r0 + 1 + n];
+        let s1 = &s[1][r0..r0 + n];
+        let s2 = &s[2][rm + 1..rm + 1 + n];
+        let s3 = &s[3][r0 + 2..r0 + 2 + n];
+        let s4 = &s[4][rp + 1..rp + 1 + n];
+        let s5 = &s[5][rm..rm + n];
+        let s6 = &s[6][rm + 2..rm + 2 + n];
+        let s7 = &s[7][rp + 2..rp + 2 + n];
+        let s8 = &s[8][rp..rp + n];
+        let [d0, d1, d2, d3, d4, d5, d6, d7, d8] = dst;
+        let d0 = &mut d0[row + 1..row + 1 + n];
+        let d1 = &mut d1[row + 1..row + 1 + n];
+        let d2 = &mut d2[row + 1..row + 1 + n];
+        let d3 = &mut d3[row + 1..row + 1 + n];
+        let d4 = &mut d4[row + 1..row + 1 + n];
+        let d5 = &mut d5[row + 1..row + 1 + n];
+        let d6 = &mut d6[row + 1..row + 1 + n];
+        let d7 = &mut d7[row + 1..row + 1 + n];
+        let d8 = &mut d8[row + 1..row + 1 + n];
+        for k in 0..n {
+            let mut f = [s0[k], s1[k], s2[k], s3[k], s4[k], s5[k], s6[k], s7[k], s8[k]];
+            collide(&mut f);
+            d0[k] = f[0];
+            d1[k] = f[1];
+            d2[k] = f[2];
+            d3[k] = f[3];
+            d4[k] = f[4];
+            d5[k] = f[5];
+            d6[k] = f[6];
+            d7[k] = f[7];
+            d8[k] = f[8];
+        }
+    }
+}
+
+/// Pure streaming of a fully periodic lattice (no collision): a permutation of the populations.
+pub fn stream_periodic<T: Real>(shape: &LatticeShape, src: &[T], dst: &mut [&mut [T]; Q]) {
+    bulk_rows(shape, src, dst, 0, shape.ny, |_f: &mut [T; Q]| {});
+}
+
+/// The static description of a lattice a step works on: its shape, side conditions and node flags
+/// ([`FLUID`] / [`SOLID`], one per node).
+#[derive(Clone, Copy, Debug)]
+pub struct Domain<'a, T> {
+    /// Size and layout.
+    pub shape: LatticeShape,
+    /// Side conditions.
+    pub bc: Boundaries<T>,
+    /// One flag per node.
+    pub flags: &'a [u8],
+}
+
+/// Collision parameters of the fluid away from moving solids.
+#[derive(Clone, Copy, Debug)]
+pub struct FluidParams<T> {
+    /// Relaxation time τ (> ½); ω = 1/τ.
+    pub tau: T,
+    /// Uniform body-force density (lattice units, Guo forcing); zero for none.
+    pub force: [T; 2],
+}
+
+impl<T: Real> FluidParams<T> {
+    /// Whether a body force is applied.
+    #[inline(always)]
+    pub fn forced(&self) -> bool {
+        self.force[0] != T::zero() || self.force[1] != T::zero()
+    }
+}
+
+/// Redo the special nodes listed in `special` (sorted, all within rows y0..y1) with the general gather and
+/// BGK collision; solid obstacle nodes are set to the rest equilibrium (ρ = 1, u = 0).
+pub fn fix_special_nodes<T: Real>(
+    domain: &Domain<'_, T>,
+    src: &[T],
+    dst: &mut [&mut [T]; Q],
+    y0: usize,
+    params: &FluidParams<T>,
+    special: &[u32],
+) {
+    let (shape, bc, flags) = (&domain.shape, &domain.bc, domain.flags);
+    let omega = T::one() / params.tau;
+    let base = y0 * shape.nx;
+    let rest = equilibrium(T::one(), [T::zero(); 2]);
+    for &node in special {
+        let n = node as usize;
+        let local = n - base;
+        if flags[n] == SOLID {
+            for q in 0..Q {
+                dst[q][local] = rest[q];
+            }
+            continue;
+        }
+        let (x, y) = shape.coords(n);
+        let mut f = gather_node(shape, src, bc, flags, x, y);
+        if params.forced() {
+            bgk_collide_forced(&mut f, omega, params.force);
+        } else {
+            bgk_collide(&mut f, omega);
+        }
+        for q in 0..Q {
+            dst[q][local] = f[q];
+        }
+    }
+}
+
+/// Nodes covered by moving solids, in compressed-row form: node `nodes[k]` is covered by the shares
+/// `shares[offsets[k] as usize .. offsets[k + 1] as usize]`.
+#[derive(Clone, Copy, Debug)]
+pub struct CoveredNodes<'a, T> {
+    /// Covered node indices, increasing.
+    pub nodes: &'a [u32],
+    /// Share ranges, `nodes.len() + 1` entries, absolute indices into `shares`.
+    pub offsets: &'a [u32],
+    /// Every share of the lattice.
+    pub shares: &'a [SolidShare<T>],
+}
+
+/// Redo the covered nodes of a band with the partially-saturated collision. `exchange` receives the momentum
+/// handed to each share (force on the solid, lattice units); it covers the shares from
+/// `covered.offsets[0]` on. Covered nodes that are solid obstacle nodes are skipped.
+pub fn collide_covered_nodes<T: Real>(
+    domain: &Domain<'_, T>,
+    src: &[T],
+    dst: &mut [&mut [T]; Q],
+    y0: usize,
+    params: &PsmParams<T>,
+    covered: CoveredNodes<'_, T>,
+    exchange: &mut [[T; 2]],
+) {
+    let (shape, bc, flags) = (&domain.shape, &domain.bc, domain.flags);
+    let base = y0 * shape.nx;
+    let first = covered.offsets.first().copied().unwrap_or(0) as usize;
+    for (k, &node) in covered.nodes.iter().enumerate() {
+        let n = node as usize;
+        let (a, b) = (covered.offsets[k] as usize, covered.offsets[k + 1] as usize);
+        let ex = &mut exchange[a - first..b - first];
+        if flags[n] == SOLID {
+            for e in ex.iter_mut() {
+                *e = [T::zero(); 2];
+            }
+            continue;
+        }
+        let (x, y) = shape.coords(n);
+        let mut f = gather_node(shape, src, bc, flags, x, y);
+        psm_collide(&mut f, params, &covered.shares[a..b], ex);
+        let local = n - base;
+        for q in 0..Q {
+            dst[q][local] = f[q];
+        }
+    }
+}
+
+/// One complete update of the rows y0..y1 (bulk, special nodes, covered nodes), for a lattice without moving
+/// solids. `special` must be the part of the [`classify_special_nodes`] list that lies in the band.
+pub fn step_band<T: Real>(
+    domain: &Domain<'_, T>,
+    src: &[T],
+    dst: &mut [&mut [T]; Q],
+    y0: usize,
+    y1: usize,
+    params: &FluidParams<T>,
+    special: &[u32],
+) {
+    let shape = &domain.shape;
+    let omega = T::one() / params.tau;
+    if params.forced() {
+        let force = params.force;
+        bulk_rows(shape, src, dst, y0, y1, |f: &mut [T; Q]| {
+            bgk_collide_forced(f, omega, force)
+        });
+    } else {
+        bulk_rows(shape, src, dst, y0, y1, |f: &mut [T; Q]| bgk_collide(f, omega));
+    }
+    fix_special_nodes(domain, src, dst, y0, params, special);
+}
+
+/// The sub-slice of a sorted node list lying in rows y0..y1.
+pub fn nodes_in_rows<'a>(shape: &LatticeShape, nodes: &'a [u32], y0: usize, y1: usize) -> &'a [u32] {
+    let (a, b) = ((y0 * shape.nx) as u32, (y1 * shape.nx) as u32);
+    let lo = nodes.partition_point(|&n| n < a);
+    let hi = nodes.partition_point(|&n| n < b);
+    &nodes[lo..hi]
+}

@@ -1,0 +1,1 @@
+//! Property tests and Kani harnesses live in `tests/` and `src/harness.rs`.
