@@ -5,3 +5,4 @@
 //! solutions the validation tests compare against.
 pub mod analytic;
 pub mod lbm;
+pub mod dem;

@@ -1,0 +1,1 @@
+//! Reference (oracle) DEM: brute-force ellipse contact by dense boundary sampling, plain force laws.

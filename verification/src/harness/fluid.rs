@@ -1,0 +1,1 @@
+//! Fluid index-arithmetic harness bodies.
