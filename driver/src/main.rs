@@ -1,1 +1,71 @@
-fn main() {}
+//! The `lbdem` command line.
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use clap::{Parser, Subcommand};
+
+/// Coupled lattice-Boltzmann / discrete-element simulator for porous rock.
+#[derive(Parser)]
+#[command(name = "lbdem", version, about)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Run a scene and write its outputs (summary.json, CSV) into --out.
+    Run {
+        /// Scene file (TOML, physical units).
+        scene: PathBuf,
+        /// Output directory.
+        #[arg(long)]
+        out: PathBuf,
+        /// Replace a previous run in the output directory.
+        #[arg(long)]
+        overwrite: bool,
+        /// Worker threads (default: all cores). Results are bitwise identical for any count.
+        #[arg(long)]
+        threads: Option<usize>,
+        /// No progress bar.
+        #[arg(long)]
+        quiet: bool,
+    },
+    /// Validate a scene and print its derived lattice parameters without running it.
+    Check {
+        /// Scene file.
+        scene: PathBuf,
+    },
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Command::Run {
+            scene,
+            out,
+            overwrite,
+            threads,
+            quiet,
+        } => {
+            if let Some(n) = threads {
+                if let Err(e) = rayon::ThreadPoolBuilder::new()
+                    .num_threads(n.max(1))
+                    .build_global()
+                {
+                    eprintln!("lbdem: cannot set up {n} threads: {e}");
+                    return ExitCode::FAILURE;
+                }
+            }
+            lbdem::run::run(&scene, &out, &lbdem::run::RunOptions { overwrite, quiet }).map(|_| ())
+        }
+        Command::Check { scene } => lbdem::run::check(&scene).map(|s| print!("{s}")),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("lbdem: error: {e}");
+            ExitCode::FAILURE
+        }
+    }
+}

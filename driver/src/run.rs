@@ -1,0 +1,118 @@
+//! `lbdem run` and `lbdem check`: load a scene, print the derived parameters, run it with a progress bar, and
+//! write `summary.json` and the CSV outputs.
+use std::path::Path;
+
+use indicatif::{ProgressBar, ProgressStyle};
+use serde_json::json;
+
+use crate::channel::{run_channel, ChannelOutcome, ChannelSetup};
+use crate::error::Result;
+use crate::output::{csv, prepare_dir, write_atomic};
+use crate::scene::{Precision, Scene, SceneKind};
+
+/// Options of `lbdem run`.
+#[derive(Clone, Debug, Default)]
+pub struct RunOptions {
+    /// Replace a previous run in the output directory.
+    pub overwrite: bool,
+    /// Hide the progress bar (tests, CI logs).
+    pub quiet: bool,
+}
+
+/// Validate a scene and print its derived parameters without running it.
+pub fn check(scene_path: &Path) -> Result<String> {
+    let scene = Scene::load(scene_path)?;
+    let labels = scene.scene.units.labels();
+    match scene.scene.kind {
+        SceneKind::Channel => {
+            let setup = ChannelSetup::new(&scene)?;
+            let mut s = format!("scene {} is valid (kind = channel)\n", scene_path.display());
+            s += &setup.describe(labels);
+            for w in &setup.warnings.0 {
+                s += &format!("  warning: {w}\n");
+            }
+            Ok(s)
+        }
+    }
+}
+
+/// Run a scene, writing outputs into `out`. Returns the summary as JSON.
+pub fn run(scene_path: &Path, out: &Path, opts: &RunOptions) -> Result<serde_json::Value> {
+    let scene = Scene::load(scene_path)?;
+    let labels = scene.scene.units.labels();
+    match scene.scene.kind {
+        SceneKind::Channel => {
+            let setup = ChannelSetup::new(&scene)?;
+            prepare_dir(out, opts.overwrite)?;
+            eprintln!("lbdem: channel scene {}", scene_path.display());
+            eprint!("{}", setup.describe(labels));
+            for w in &setup.warnings.0 {
+                eprintln!("  WARNING: {w}");
+            }
+            let bar = if opts.quiet {
+                ProgressBar::hidden()
+            } else {
+                ProgressBar::new(setup.steps)
+            };
+            bar.set_style(
+                ProgressStyle::with_template("{bar:40} {pos}/{len} steps  {per_sec}  eta {eta}")
+                    .unwrap_or_else(|_| ProgressStyle::default_bar()),
+            );
+            let interval = scene.run.check_interval.unwrap_or(200);
+            let out_name = out.display().to_string();
+            let outcome: ChannelOutcome = match scene.scene.precision {
+                Precision::F64 => run_channel::<f64>(
+                    &setup,
+                    scene.run.steady_tolerance,
+                    interval,
+                    &out_name,
+                    |s| bar.set_position(s),
+                ),
+                Precision::F32 => run_channel::<f32>(
+                    &setup,
+                    scene.run.steady_tolerance,
+                    interval,
+                    &out_name,
+                    |s| bar.set_position(s),
+                ),
+            }?;
+            bar.finish_and_clear();
+            let profile = csv(
+                &["y", "u_simulated", "u_analytical", "lattice_density"],
+                outcome.profile.iter().map(|r| r.to_vec()),
+            );
+            write_atomic(&out.join("profile.csv"), profile.as_bytes())?;
+            let summary = json!({
+                "lbdem_version": env!("CARGO_PKG_VERSION"),
+                "scene_file": scene_path.display().to_string(),
+                "scene": scene,
+                "units": labels,
+                "derived": setup,
+                "steps": outcome.steps,
+                "steady": outcome.steady,
+                "wall_seconds": outcome.wall_seconds,
+                "mlups": outcome.mlups,
+                "threads": rayon::current_num_threads(),
+                "error_vs_analytical": {
+                    "l2_relative": outcome.l2_error,
+                    "flux_relative": outcome.flux_error,
+                    "centre_velocity_relative": outcome.centre_velocity_error,
+                },
+                "measured_mach": outcome.measured_mach,
+                "relative_mass_change": outcome.mass_change,
+            });
+            let text = serde_json::to_string_pretty(&summary).unwrap_or_default();
+            write_atomic(&out.join("summary.json"), text.as_bytes())?;
+            eprintln!(
+                "lbdem: {} steps in {:.2} s ({:.1} MLUPS); L2 error {:.3e}, flux error {:.3e}; outputs in {}",
+                outcome.steps,
+                outcome.wall_seconds,
+                outcome.mlups,
+                outcome.l2_error,
+                outcome.flux_error,
+                out.display()
+            );
+            Ok(summary)
+        }
+    }
+}

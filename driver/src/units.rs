@@ -1,0 +1,256 @@
+//! Physical ⇄ lattice units: the one place where lattice quantities are derived.
+//!
+//! From the lattice spacing h, the kinematic viscosity ν and either the relaxation time τ or the time step Δt
+//! (dissertation eq. 4.9 / 4.15):
+//!
+//! * τ = ½ + 3 ν Δt / h²  ⇔  Δt = (τ − ½) h² / (3 ν); lattice viscosity ν* = (τ − ½)/3 = ν Δt/h²
+//! * lattice speed c = h/Δt (eq. 4.11), sound speed c_s = c/√3, fluid compressibility β = 1/(ρ₀ c_s²) (eq. 4.19)
+//! * pressure p = c_s² ρ (eq. 4.3): a physical pressure p is p / (ρ₀ c²) in lattice units, i.e. a density
+//!   change Δρ* = 3 p/(ρ₀ c²) of the lattice density (reference 1)
+//! * velocity u* = u/c; acceleration g* = g Δt²/h; body-force density F* = ρ* g*
+//! * forces on grains (2-D, per unit thickness): F = F* · ρ₀ h³/Δt²; torques T = T* · ρ₀ h⁴/Δt²
+//!
+//! The dissertation's parameter tables are not all self-consistent (e.g. table 6.2: h = 0.009 cm,
+//! Δt = 1e−5 s, ν = 0.2 cm²/s give τ = 0.574, not the 0.625 listed). lbdem therefore takes h, ν and one of τ
+//! or Δt, derives the other, and prints every derived figure at start-up.
+use serde::Serialize;
+
+use crate::error::{LbdemError, Result};
+use crate::scene::FluidSection;
+
+/// Relaxation time below which BGK is close to its stability limit and a warning is printed.
+pub const TAU_WARN_LOW: f64 = 0.51;
+/// Relaxation time above which half-way bounce-back walls move noticeably (slip ∝ τ²) and a warning is printed.
+pub const TAU_WARN_HIGH: f64 = 2.0;
+/// Expected Mach number above which compressibility errors (∝ Ma²) exceed about 1 %: warning.
+pub const MACH_WARN: f64 = 0.1;
+/// Expected Mach number above which a run is refused unless `run.allow_high_mach = true`.
+pub const MACH_REFUSE: f64 = 0.35;
+/// Relative density variation across the domain above which a warning is printed.
+pub const DENSITY_DROP_WARN: f64 = 0.05;
+/// Relative density variation across the domain above which a run is refused.
+pub const DENSITY_DROP_REFUSE: f64 = 0.2;
+
+/// The conversion between physical and lattice units of one scene.
+#[derive(Clone, Copy, Debug, Serialize)]
+pub struct LatticeUnits {
+    /// Lattice spacing h (physical length).
+    pub spacing: f64,
+    /// Time step Δt (physical time).
+    pub timestep: f64,
+    /// Reference density ρ₀ (physical).
+    pub density: f64,
+    /// Kinematic viscosity ν (physical).
+    pub viscosity: f64,
+    /// Relaxation time τ.
+    pub tau: f64,
+    /// Lattice viscosity ν* = (τ − ½)/3.
+    pub lattice_viscosity: f64,
+    /// Lattice speed c = h/Δt (physical velocity).
+    pub lattice_speed: f64,
+    /// Speed of sound c_s = c/√3 (physical velocity).
+    pub sound_speed: f64,
+    /// Fluid compressibility β = 1/(ρ₀ c_s²) (physical 1/pressure).
+    pub compressibility: f64,
+}
+
+impl LatticeUnits {
+    /// Derive the units from the `[fluid]` section (validated ranges are re-checked here).
+    pub fn from_fluid(f: &FluidSection) -> Result<Self> {
+        let (h, nu) = (f.spacing, f.viscosity);
+        let (tau, dt) = match (f.tau, f.timestep) {
+            (Some(tau), None) => (tau, (tau - 0.5) * h * h / (3.0 * nu)),
+            (None, Some(dt)) => (0.5 + 3.0 * nu * dt / (h * h), dt),
+            _ => {
+                return Err(LbdemError::field(
+                    "fluid.tau",
+                    "missing or doubly given",
+                    "give exactly one of fluid.tau and fluid.timestep",
+                    "e.g. tau = 0.875",
+                ))
+            }
+        };
+        if !(tau.is_finite() && tau > 0.5) {
+            return Err(LbdemError::field(
+                "fluid.timestep",
+                dt,
+                &format!(
+                    "gives tau = 1/2 + 3 nu dt/h^2 = {tau:.6}, and BGK is unstable for tau <= 1/2"
+                ),
+                "increase the time step or the viscosity, or refine less",
+            ));
+        }
+        let c = h / dt;
+        let cs = c / 3f64.sqrt();
+        Ok(Self {
+            spacing: h,
+            timestep: dt,
+            density: f.density,
+            viscosity: nu,
+            tau,
+            lattice_viscosity: (tau - 0.5) / 3.0,
+            lattice_speed: c,
+            sound_speed: cs,
+            compressibility: 1.0 / (f.density * cs * cs),
+        })
+    }
+
+    /// Physical pressure → lattice pressure p* = p/(ρ₀ c²) (lattice density change is 3 p*).
+    pub fn pressure_to_lattice(&self, p: f64) -> f64 {
+        p / (self.density * self.lattice_speed * self.lattice_speed)
+    }
+
+    /// Lattice pressure → physical pressure.
+    pub fn pressure_to_physical(&self, p: f64) -> f64 {
+        p * self.density * self.lattice_speed * self.lattice_speed
+    }
+
+    /// Physical velocity → lattice velocity.
+    pub fn velocity_to_lattice(&self, u: f64) -> f64 {
+        u / self.lattice_speed
+    }
+
+    /// Lattice velocity → physical velocity.
+    pub fn velocity_to_physical(&self, u: f64) -> f64 {
+        u * self.lattice_speed
+    }
+
+    /// Physical acceleration → lattice acceleration g Δt²/h.
+    pub fn acceleration_to_lattice(&self, g: f64) -> f64 {
+        g * self.timestep * self.timestep / self.spacing
+    }
+
+    /// Lattice force (2-D, per unit thickness) → physical force per unit thickness.
+    pub fn force_to_physical(&self, f: f64) -> f64 {
+        f * self.density * self.spacing.powi(3) / (self.timestep * self.timestep)
+    }
+
+    /// Mach number of a physical speed: u / c_s.
+    pub fn mach(&self, u: f64) -> f64 {
+        u / self.sound_speed
+    }
+}
+
+/// Warnings collected while deriving parameters; printed at start-up and written to the summary.
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct Warnings(pub Vec<String>);
+
+impl Warnings {
+    /// Add a warning.
+    pub fn push(&mut self, w: impl Into<String>) {
+        self.0.push(w.into());
+    }
+}
+
+/// Check the relaxation time against the warning thresholds.
+pub fn check_tau(units: &LatticeUnits, warnings: &mut Warnings) {
+    if units.tau < TAU_WARN_LOW {
+        warnings.push(format!(
+            "tau = {:.5} is within {:.3} of the BGK stability limit 1/2: expect instability at any \
+             appreciable grid Reynolds number; raise tau (coarser h or larger dt) if the run diverges",
+            units.tau,
+            units.tau - 0.5
+        ));
+    }
+    if units.tau > TAU_WARN_HIGH {
+        warnings.push(format!(
+            "tau = {:.3} > {TAU_WARN_HIGH}: half-way bounce-back walls move by (16(tau-1/2)^2-3)/(3H^2) \
+             relative; use tau <= 1 for accuracy",
+            units.tau
+        ));
+    }
+}
+
+/// Check an expected Mach number: warn above [`MACH_WARN`], refuse above [`MACH_REFUSE`] unless allowed.
+pub fn check_mach(mach: f64, allow_high: bool, warnings: &mut Warnings) -> Result<()> {
+    if !mach.is_finite() || (mach > MACH_REFUSE && !allow_high) {
+        return Err(LbdemError::field(
+            "expected Mach number",
+            format!("{mach:.3}"),
+            &format!(
+                "lattice-Boltzmann compressibility error grows like Ma^2 and BGK loses stability near Ma ~ 0.4; \
+                 lbdem refuses Ma > {MACH_REFUSE}"
+            ),
+            "lower the driving (pressure drop or acceleration), or shorten the time step (smaller dt raises the \
+             lattice sound speed); set run.allow_high_mach = true to run anyway",
+        ));
+    }
+    if mach > MACH_WARN {
+        warnings.push(format!(
+            "expected Mach number {mach:.3} > {MACH_WARN}: compressibility error ~ Ma^2 = {:.1} %",
+            100.0 * mach * mach
+        ));
+    }
+    Ok(())
+}
+
+/// Check a relative density variation across the domain.
+pub fn check_density_drop(field: &str, drop: f64, warnings: &mut Warnings) -> Result<()> {
+    if !drop.is_finite() || drop > DENSITY_DROP_REFUSE {
+        return Err(LbdemError::field(
+            field,
+            format!("relative lattice density drop {drop:.3}"),
+            &format!(
+                "the lattice fluid is compressible (p = c_s^2 rho); density variations above {:.0} % make the \
+                 incompressible flow it approximates meaningless",
+                DENSITY_DROP_REFUSE * 100.0
+            ),
+            "lower the pressure drop, or shorten the time step (raising the lattice sound speed)",
+        ));
+    }
+    if drop > DENSITY_DROP_WARN {
+        warnings.push(format!(
+            "relative density drop {:.1} % > {:.0} %: compressibility errors of order (drop)^2/8",
+            drop * 100.0,
+            DENSITY_DROP_WARN * 100.0
+        ));
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn fluid(tau: Option<f64>, dt: Option<f64>) -> FluidSection {
+        FluidSection {
+            density: 1.0,
+            viscosity: 0.2,
+            spacing: 0.009,
+            tau,
+            timestep: dt,
+        }
+    }
+
+    #[test]
+    fn tau_and_timestep_are_inverse() {
+        let a = LatticeUnits::from_fluid(&fluid(Some(0.625), None)).unwrap();
+        let b = LatticeUnits::from_fluid(&fluid(None, Some(a.timestep))).unwrap();
+        assert!((b.tau - 0.625).abs() < 1e-12);
+        assert!((a.lattice_viscosity - 0.125 / 3.0).abs() < 1e-15);
+    }
+
+    #[test]
+    fn dissertation_table_6_2_is_inconsistent_and_we_say_which_tau_it_implies() {
+        // h = 0.009 cm, dt = 1e-5 s, nu = 0.2 cm^2/s => tau = 0.5 + 3*0.2*1e-5/0.009^2 = 0.5741
+        let u = LatticeUnits::from_fluid(&fluid(None, Some(1e-5))).unwrap();
+        assert!((u.tau - (0.5 + 6e-6 / 8.1e-5)).abs() < 1e-12);
+        assert!((u.lattice_speed - 900.0).abs() < 1e-9);
+    }
+
+    #[test]
+    fn tau_at_or_below_half_is_refused() {
+        let mut f = fluid(None, Some(1e-30));
+        f.viscosity = 0.0;
+        assert!(LatticeUnits::from_fluid(&f).is_err());
+    }
+
+    #[test]
+    fn high_mach_is_refused_unless_allowed() {
+        let mut w = Warnings::default();
+        assert!(check_mach(0.5, false, &mut w).is_err());
+        assert!(check_mach(0.5, true, &mut w).is_ok());
+        assert!(check_mach(0.05, false, &mut w).is_ok());
+        assert_eq!(w.0.len(), 1, "only the Ma = 0.5 run is warned about");
+    }
+}
