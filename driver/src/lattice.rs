@@ -47,7 +47,7 @@ impl<T: Real> FluidLattice<T> {
                 "pair periodic sides",
             )
         })?;
-        if !(params.tau.to_f64_exact() > 0.5) {
+        if params.tau.to_f64_exact().partial_cmp(&0.5) != Some(std::cmp::Ordering::Greater) {
             return Err(LbdemError::field(
                 "fluid.tau",
                 params.tau.to_f64_exact(),
@@ -128,8 +128,8 @@ impl<T: Real> FluidLattice<T> {
                 let n = self.shape.index(x, y);
                 let (rho, u) = state(x, y);
                 let f = equilibrium(rho, u);
-                for q in 0..Q {
-                    self.src[q * stride + n] = f[q];
+                for (q, fq) in f.iter().enumerate() {
+                    self.src[q * stride + n] = *fq;
                 }
             }
         }

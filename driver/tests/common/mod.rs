@@ -1,0 +1,58 @@
+//! Helpers shared by the driver's integration tests.
+#![allow(dead_code)]
+use lbdem::scene::Scene;
+
+/// A channel scene written directly in lattice units (h = 1, Δt = 1, ρ₀ = 1, so ν = (τ − ½)/3 and a pressure
+/// of p is a lattice density change of 3p).
+pub fn lattice_channel(
+    ny: usize,
+    nx: usize,
+    tau: f64,
+    drive: &str,
+    strength: f64,
+    steps: u64,
+    tol: f64,
+) -> Scene {
+    let nu = (tau - 0.5) / 3.0;
+    let (length, key) = match drive {
+        "pressure" => ((nx - 1) as f64, "pressure_drop"),
+        _ => (nx as f64, "acceleration"),
+    };
+    let text = format!(
+        r#"
+[scene]
+kind = "channel"
+units = "cgs"
+[fluid]
+density = 1.0
+viscosity = {nu:e}
+spacing = 1.0
+tau = {tau:e}
+[channel]
+length = {length:e}
+width = {ny}.0
+drive = "{drive}"
+{key} = {strength:e}
+[run]
+steps = {steps}
+steady_tolerance = {tol:e}
+check_interval = 100
+"#
+    );
+    Scene::from_toml(&text, "test").expect("test scene parses")
+}
+
+/// Least-squares slope of log(err) against log(n).
+pub fn loglog_slope(points: &[(f64, f64)]) -> f64 {
+    let m = points.len() as f64;
+    let (sx, sy) = points
+        .iter()
+        .fold((0.0, 0.0), |(a, b), &(n, e)| (a + n.ln(), b + e.ln()));
+    let (mx, my) = (sx / m, sy / m);
+    let (mut num, mut den) = (0.0, 0.0);
+    for &(n, e) in points {
+        num += (n.ln() - mx) * (e.ln() - my);
+        den += (n.ln() - mx).powi(2);
+    }
+    num / den
+}
