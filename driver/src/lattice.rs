@@ -3,12 +3,14 @@
 //!
 //! Bands are independent (each reads only the source buffer and writes only its own rows of the destination),
 //! so the result is bitwise the same for any number of threads or bands.
+use lbdem_kernels::coverage::disc_cell_fraction;
 use lbdem_kernels::fluid::boundary::Boundaries;
+use lbdem_kernels::fluid::collide::{PsmParams, SolidShare, Weighting};
 use lbdem_kernels::fluid::d2q9::{equilibrium, Q};
 use lbdem_kernels::fluid::lattice::LatticeShape;
 use lbdem_kernels::fluid::step::{
-    classify_special_nodes, gathered_moments, nodes_in_rows, planes_mut, step_band, Domain,
-    FluidParams, FLUID, SOLID,
+    classify_special_nodes, collide_covered_nodes, gathered_moments, nodes_in_rows, planes_mut,
+    step_band, CoveredNodes, Domain, FluidParams, FLUID, SOLID,
 };
 use lbdem_kernels::Real;
 use rayon::prelude::*;
@@ -26,6 +28,31 @@ pub struct FluidLattice<T: Real> {
     dst: Vec<T>,
     band_rows: usize,
     steps: u64,
+    coverage: Option<Coverage<T>>,
+}
+
+/// Nodes covered by solids (compressed rows), the solid each share belongs to, and the momentum handed to
+/// each share at the last step.
+struct Coverage<T> {
+    nodes: Vec<u32>,
+    offsets: Vec<u32>,
+    shares: Vec<SolidShare<T>>,
+    owners: Vec<u32>,
+    exchange: Vec<[T; 2]>,
+    weighting: Weighting,
+}
+
+/// A disc as the fluid sees it: centre and radius (lattice units), rigid-body velocity and angular velocity.
+#[derive(Clone, Copy, Debug)]
+pub struct FluidDisc {
+    /// Centre (lattice units, node coordinates).
+    pub center: [f64; 2],
+    /// Radius the fluid sees (lattice units).
+    pub radius: f64,
+    /// Translational velocity (lattice units).
+    pub velocity: [f64; 2],
+    /// Angular velocity (rad per step).
+    pub spin: f64,
 }
 
 impl<T: Real> FluidLattice<T> {
@@ -66,6 +93,7 @@ impl<T: Real> FluidLattice<T> {
             dst: vec![T::zero(); len],
             band_rows: 8,
             steps: 0,
+            coverage: None,
         };
         lattice.reclassify();
         lattice.fill_equilibrium(|_, _| (T::one(), [T::zero(); 2]));
@@ -145,6 +173,79 @@ impl<T: Real> FluidLattice<T> {
         &mut self.src
     }
 
+    /// Cover the lattice with discs (exact cell fractions, several discs per cell add up, capped at 1 by the
+    /// collision) using the partially-saturated collision with weighting `weighting`. Replaces any previous
+    /// coverage. Discs must lie inside the lattice (no periodic images are taken).
+    pub fn cover_with_discs(&mut self, discs: &[FluidDisc], weighting: Weighting) {
+        let s = self.shape;
+        let mut entries: Vec<(u32, u32, SolidShare<T>)> = Vec::new();
+        for (k, d) in discs.iter().enumerate() {
+            let x0 = (d.center[0] - d.radius - 1.0).floor().max(0.0) as usize;
+            let x1 = ((d.center[0] + d.radius + 1.0).ceil() as usize).min(s.nx - 1);
+            let y0 = (d.center[1] - d.radius - 1.0).floor().max(0.0) as usize;
+            let y1 = ((d.center[1] + d.radius + 1.0).ceil() as usize).min(s.ny - 1);
+            for y in y0..=y1 {
+                for x in x0..=x1 {
+                    let frac = disc_cell_fraction(d.center, d.radius, x as f64, y as f64);
+                    if frac > 0.0 {
+                        // Rigid-body velocity at the node: V + ω × (x − X).
+                        let (rx, ry) = (x as f64 - d.center[0], y as f64 - d.center[1]);
+                        let v = [d.velocity[0] - d.spin * ry, d.velocity[1] + d.spin * rx];
+                        let share = SolidShare {
+                            fraction: T::lit(frac),
+                            velocity: [T::lit(v[0]), T::lit(v[1])],
+                        };
+                        entries.push((s.index(x, y) as u32, k as u32, share));
+                    }
+                }
+            }
+        }
+        // Deterministic order: by node, then by disc.
+        entries.sort_by_key(|e| (e.0, e.1));
+        let mut cov = Coverage {
+            nodes: Vec::new(),
+            offsets: vec![0],
+            shares: Vec::with_capacity(entries.len()),
+            owners: Vec::with_capacity(entries.len()),
+            exchange: vec![[T::zero(); 2]; entries.len()],
+            weighting,
+        };
+        for (node, owner, share) in entries {
+            if cov.nodes.last() != Some(&node) {
+                if !cov.nodes.is_empty() {
+                    cov.offsets.push(cov.shares.len() as u32);
+                }
+                cov.nodes.push(node);
+            }
+            cov.shares.push(share);
+            cov.owners.push(owner);
+        }
+        cov.offsets.push(cov.shares.len() as u32);
+        if cov.nodes.is_empty() {
+            cov.offsets = vec![0];
+        }
+        self.coverage = Some(cov);
+    }
+
+    /// Number of nodes covered (partly or wholly) by solids.
+    pub fn covered_nodes(&self) -> usize {
+        self.coverage.as_ref().map_or(0, |c| c.nodes.len())
+    }
+
+    /// Force on each of `count` solids from the last step (lattice units), summed in a fixed order.
+    pub fn solid_forces(&self, count: usize) -> Vec<[f64; 2]> {
+        let mut out = vec![[0.0; 2]; count];
+        if let Some(c) = &self.coverage {
+            for (owner, ex) in c.owners.iter().zip(c.exchange.iter()) {
+                if let Some(f) = out.get_mut(*owner as usize) {
+                    f[0] += ex[0].to_f64_exact();
+                    f[1] += ex[1].to_f64_exact();
+                }
+            }
+        }
+        out
+    }
+
     /// Advance one lattice step, in parallel over row bands on the current rayon pool.
     pub fn step(&mut self) {
         let shape = self.shape;
@@ -158,22 +259,69 @@ impl<T: Real> FluidLattice<T> {
         let src = &self.src;
         let band_rows = self.band_rows;
         let band_len = band_rows * shape.nx;
+        let bands = shape.ny.div_ceil(band_rows);
         // Split the nine destination planes into row bands.
         let planes = planes_mut(&shape, &mut self.dst);
         let mut chunked: Vec<std::slice::ChunksMut<'_, T>> =
             planes.into_iter().map(|p| p.chunks_mut(band_len)).collect();
-        let bands = shape.ny.div_ceil(band_rows);
-        let mut work: Vec<(usize, [&mut [T]; Q])> = Vec::with_capacity(bands);
+        // Split the covered nodes and their exchange buffer along the same bands.
+        type Band<'a, T> = (usize, [&'a mut [T]; Q], (usize, usize), &'a mut [[T; 2]]);
+        let mut work: Vec<Band<'_, T>> = Vec::with_capacity(bands);
+        type Static<'a, T> = (&'a [u32], &'a [u32], &'a [SolidShare<T>], Weighting);
+        let (cov, mut exchange_rest): (Option<Static<'_, T>>, &mut [[T; 2]]) =
+            match &mut self.coverage {
+                Some(Coverage {
+                    nodes,
+                    offsets,
+                    shares,
+                    exchange,
+                    weighting,
+                    ..
+                }) => (
+                    Some((&nodes[..], &offsets[..], &shares[..], *weighting)),
+                    &mut exchange[..],
+                ),
+                None => (None, &mut []),
+            };
+        let (cov_nodes, offsets): (&[u32], &[u32]) = match cov {
+            Some((n, o, _, _)) => (n, o),
+            None => (&[], &[0]),
+        };
+        let mut lo = 0usize;
         for b in 0..bands {
+            let y0 = b * band_rows;
+            let y1 = (y0 + band_rows).min(shape.ny);
             let band: [&mut [T]; Q] =
                 std::array::from_fn(|q| chunked[q].next().unwrap_or_default());
-            work.push((b * band_rows, band));
+            let end = (y1 * shape.nx) as u32;
+            let hi = lo + cov_nodes[lo..].partition_point(|&n| n < end);
+            let len = (offsets[hi] - offsets[lo]) as usize;
+            let (mine, rest) = std::mem::take(&mut exchange_rest).split_at_mut(len);
+            exchange_rest = rest;
+            work.push((y0, band, (lo, hi), mine));
+            lo = hi;
         }
-        work.into_par_iter().for_each(|(y0, mut band)| {
-            let y1 = (y0 + band_rows).min(shape.ny);
-            let sp = nodes_in_rows(&shape, special, y0, y1);
-            step_band(&domain, src, &mut band, y0, y1, &params, sp);
+        let psm = cov.map(|c| PsmParams {
+            tau: params.tau,
+            weighting: c.3,
+            force: params.force,
         });
+        work.into_par_iter()
+            .for_each(|(y0, mut band, (lo, hi), exchange)| {
+                let y1 = (y0 + band_rows).min(shape.ny);
+                let sp = nodes_in_rows(&shape, special, y0, y1);
+                step_band(&domain, src, &mut band, y0, y1, &params, sp);
+                if let (Some((nodes, offsets, shares, _)), Some(psm)) = (cov, psm.as_ref()) {
+                    if hi > lo {
+                        let covered = CoveredNodes {
+                            nodes: &nodes[lo..hi],
+                            offsets: &offsets[lo..=hi],
+                            shares,
+                        };
+                        collide_covered_nodes(&domain, src, &mut band, y0, psm, covered, exchange);
+                    }
+                }
+            });
         std::mem::swap(&mut self.src, &mut self.dst);
         self.steps += 1;
     }
