@@ -5,10 +5,22 @@
 use lbdem::channel::{run_channel, ChannelOutcome, ChannelSetup};
 use lbdem::scene::Scene;
 
-fn solve(ny: usize, nx: usize, tau: f64, drive: &str, strength: f64) -> (ChannelSetup, ChannelOutcome) {
+fn solve(
+    ny: usize,
+    nx: usize,
+    tau: f64,
+    drive: &str,
+    strength: f64,
+) -> (ChannelSetup, ChannelOutcome) {
     let nu = (tau - 0.5) / 3.0;
-    let steps = (35.0 * (ny * ny) as f64 / (std::f64::consts::PI.powi(2) * nu)) as u64 + 40 * nx as u64 + 2000;
-    let (length, key) = if drive == "pressure" { ((nx - 1) as f64, "pressure_drop") } else { (nx as f64, "acceleration") };
+    let steps = (35.0 * (ny * ny) as f64 / (std::f64::consts::PI.powi(2) * nu)) as u64
+        + 40 * nx as u64
+        + 2000;
+    let (length, key) = if drive == "pressure" {
+        ((nx - 1) as f64, "pressure_drop")
+    } else {
+        (nx as f64, "acceleration")
+    };
     let text = format!(
         "[scene]\nkind = \"channel\"\nunits = \"cgs\"\n[fluid]\ndensity = 1.0\nviscosity = {nu:e}\nspacing = 1.0\n\
          tau = {tau:e}\n[channel]\nlength = {length:e}\nwidth = {ny}.0\ndrive = \"{drive}\"\n{key} = {strength:e}\n\
@@ -24,7 +36,10 @@ fn slope(points: &[(f64, f64)]) -> f64 {
     let m = points.len() as f64;
     let mx = points.iter().map(|p| p.0.ln()).sum::<f64>() / m;
     let my = points.iter().map(|p| p.1.ln()).sum::<f64>() / m;
-    let num: f64 = points.iter().map(|p| (p.0.ln() - mx) * (p.1.ln() - my)).sum();
+    let num: f64 = points
+        .iter()
+        .map(|p| (p.0.ln() - mx) * (p.1.ln() - my))
+        .sum();
     let den: f64 = points.iter().map(|p| (p.0.ln() - mx).powi(2)).sum();
     num / den
 }
@@ -43,10 +58,22 @@ fn main() {
             println!("| Poiseuille, body force, τ = 0.875, {ny} nodes across: L2 error | {:.3e} | = slip formula (16Λ−3)/(3H²) to 1e-9 |", out.l2_error);
         }
     }
-    println!("| Poiseuille, body force, 3…39 nodes: convergence order | {:.3} | 2 ± 0.1 |", -slope(&pts));
+    println!(
+        "| Poiseuille, body force, 3…39 nodes: convergence order | {:.3} | 2 ± 0.1 |",
+        -slope(&pts)
+    );
     let ts = 0.5 + (3.0f64 / 16.0).sqrt();
-    let (_, out) = solve(16, 1, ts, "body_force", 8.0 * (ts - 0.5) / 3.0 * 0.01 / 256.0);
-    println!("| Poiseuille, body force, τ* = ½+√(3/16), 16 nodes: L2 error | {:.1e} | < 1e-9 |", out.l2_error);
+    let (_, out) = solve(
+        16,
+        1,
+        ts,
+        "body_force",
+        8.0 * (ts - 0.5) / 3.0 * 0.01 / 256.0,
+    );
+    println!(
+        "| Poiseuille, body force, τ* = ½+√(3/16), 16 nodes: L2 error | {:.1e} | < 1e-9 |",
+        out.l2_error
+    );
     let mut pts = Vec::new();
     for ny in [3usize, 5, 9, 17] {
         let nx = 8 * ny + 1;
@@ -61,7 +88,10 @@ fn main() {
             );
         }
     }
-    println!("| Poiseuille, Zou–He pressure, 3…17 nodes: convergence order | {:.3} | 2 ± 0.15 |", -slope(&pts));
+    println!(
+        "| Poiseuille, Zou–He pressure, 3…17 nodes: convergence order | {:.3} | 2 ± 0.15 |",
+        -slope(&pts)
+    );
     let mut pts = Vec::new();
     for drho in [0.02, 0.04, 0.08, 0.16] {
         let (setup, out) = solve(12, 49, ts, "pressure", drho / 3.0);
