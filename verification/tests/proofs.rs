@@ -46,6 +46,13 @@ fn shape_layout_for_all_small_lattices() {
 }
 
 #[test]
+fn shape_new_at_the_size_limits() {
+    let runs = for_all(|c| fluid::shape_new_any_size(c, Some(&fluid::EDGE_SIZES)));
+    let k = fluid::EDGE_SIZES.len() as u64;
+    assert_eq!(runs, k * k * fluid::ELEMENT_BYTES.len() as u64);
+}
+
+#[test]
 fn index_coords_offset_for_all_nodes_and_directions() {
     let runs = for_all(|c| fluid::index_coords_offset(c, MAX));
     assert_eq!(runs, 2 * Q * triangle(MAX) * triangle(MAX));
@@ -87,6 +94,13 @@ mod kani_proofs {
     #[kani::proof]
     fn shape_layout() {
         fluid::shape_layout(&mut KaniChooser, MAX);
+    }
+
+    /// Every nx, ny ∈ 1..=usize::MAX.
+    #[kani::proof]
+    #[kani::unwind(10)]
+    fn shape_new_any_size() {
+        fluid::shape_new_any_size(&mut KaniChooser, None);
     }
 
     #[kani::proof]

@@ -194,3 +194,60 @@ pub fn nodes_in_rows_split(c: &mut dyn Chooser, max: usize) {
     assert_eq!(lower, &whole[..lower.len()]);
     assert_eq!(upper, &whole[lower.len()..]);
 }
+
+/// Lattice sizes at the edges of what [`LatticeShape::new`] must accept or refuse (page and `u32` limits),
+/// for the bounded-exhaustive run of [`shape_new_any_size`]; under Kani every size is taken instead.
+pub const EDGE_SIZES: [usize; 10] = [
+    1,
+    2,
+    511,
+    4096,
+    65_535,
+    65_536,
+    u32::MAX as usize,
+    u32::MAX as usize + 1,
+    usize::MAX / 2,
+    usize::MAX,
+];
+
+/// `LatticeShape::new` for nx, ny anywhere in 1..=usize::MAX (`sizes = None`, for Kani) or from a table
+/// (`sizes = Some(..)`): it never panics or overflows; it accepts exactly the sizes whose node count fits `u32`
+/// and whose padded buffer length fits `usize` (checked independently in `u128`), with the stride
+/// ⌈n/page⌉·page + pad (page = 4096 B, pad = 320 B, in elements); for accepted sizes the far-corner node's
+/// index, coordinates, last offset and neighbours in every direction are computed in bounds.
+pub fn shape_new_any_size(c: &mut dyn Chooser, sizes: Option<&[usize]>) {
+    let size = |c: &mut dyn Chooser| match sizes {
+        Some(table) => table[c.usize_in(0, table.len() - 1)],
+        None => c.usize_in(1, usize::MAX),
+    };
+    let nx = size(c);
+    let ny = size(c);
+    let eb = ELEMENT_BYTES[c.usize_in(0, ELEMENT_BYTES.len() - 1)];
+    let n = nx as u128 * ny as u128;
+    let (page, pad) = ((4096 / eb) as u128, (320 / eb) as u128);
+    let stride = n.div_ceil(page) * page + pad;
+    let fits = n <= u32::MAX as u128 && stride * Q as u128 <= usize::MAX as u128;
+    match LatticeShape::new(nx, ny, eb) {
+        Ok(shape) => {
+            assert!(fits, "accepted a size that does not fit");
+            assert_eq!(shape.stride as u128, stride);
+            assert_eq!(shape.nodes() as u128, n);
+            assert_eq!(shape.buffer_len() as u128, stride * Q as u128);
+            let last = shape.index(nx - 1, ny - 1);
+            assert_eq!(last as u128, n - 1);
+            assert_eq!(shape.coords(last), (nx - 1, ny - 1));
+            assert!(shape.offset(Q - 1, last) < shape.buffer_len());
+            for q in 0..Q {
+                for periodic in [[false, false], [true, true]] {
+                    if let Neighbour::Node(j) = shape.neighbour(nx - 1, ny - 1, q, periodic) {
+                        assert!(j < shape.nodes());
+                    }
+                }
+            }
+        }
+        Err(e) => {
+            assert_eq!(e, ShapeError::TooLarge);
+            assert!(!fits, "refused a size that fits");
+        }
+    }
+}
