@@ -80,6 +80,17 @@ fn nodes_in_rows_split_for_all_lattices_and_band_pairs() {
     assert_eq!(runs, MAX as u64 * 6 * bands);
 }
 
+#[test]
+fn fix_passes_in_bounds_for_all_side_conditions_obstacles_and_bands() {
+    const FIX_MAX: usize = 6;
+    let runs = for_all(|c| fluid::fix_passes_in_bounds(c, FIX_MAX));
+    let per_side = fluid::AXIS_CONDITIONS as u64;
+    let shapes: u64 = (1..=FIX_MAX)
+        .flat_map(|nx| (1..=FIX_MAX).map(move |ny| ((nx * ny + 1) * (ny + 1)) as u64))
+        .sum();
+    assert_eq!(runs, per_side * per_side * shapes);
+}
+
 /// Kani proofs of the same bodies. The layout and neighbour bodies are loop-free and proved for the same
 /// bound; the bodies that run whole passes loop over the lattice and are proved for a smaller one.
 #[cfg(kani)]
@@ -117,6 +128,12 @@ mod kani_proofs {
     #[kani::unwind(18)]
     fn bulk_rows_band() {
         fluid::bulk_rows_band(&mut KaniChooser, LOOPING_MAX);
+    }
+
+    #[kani::proof]
+    #[kani::unwind(18)]
+    fn fix_passes_in_bounds() {
+        fluid::fix_passes_in_bounds(&mut KaniChooser, 2);
     }
 
     #[kani::proof]

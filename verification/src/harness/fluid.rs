@@ -7,9 +7,15 @@
 //! and fails the run. Under `for_all` each body is enumerated exhaustively over its bounded choices; under
 //! Kani the same body is a proof over all values in the same ranges.
 use crate::Chooser;
+use lbdem_kernels::fluid::boundary::{Boundaries, SideCondition};
+use lbdem_kernels::fluid::collide::{PsmParams, SolidShare, Weighting};
+use lbdem_kernels::fluid::d2q9::equilibrium;
 use lbdem_kernels::fluid::d2q9::{OPPOSITE, Q, VELOCITIES};
 use lbdem_kernels::fluid::lattice::{LatticeShape, Neighbour, ShapeError, Side};
-use lbdem_kernels::fluid::step::{band_mut, bulk_rows, nodes_in_rows, planes, planes_mut};
+use lbdem_kernels::fluid::step::{
+    band_mut, bulk_rows, classify_special_nodes, collide_covered_nodes, nodes_in_rows, planes,
+    planes_mut, step_band, CoveredNodes, Domain, FluidParams, FLUID, SOLID,
+};
 
 /// Element sizes the layout is used with (f32, f64).
 pub const ELEMENT_BYTES: [usize; 2] = [4, 8];
@@ -250,4 +256,115 @@ pub fn shape_new_any_size(c: &mut dyn Chooser, sizes: Option<&[usize]>) {
             assert!(!fits, "refused a size that fits");
         }
     }
+}
+
+/// The side conditions of one axis, by index: 0 is a periodic pair; 1..=9 are the (low, high) pairs of
+/// wall, pressure and velocity sides.
+pub const AXIS_CONDITIONS: usize = 10;
+
+fn axis_conditions(k: usize) -> (SideCondition<f64>, SideCondition<f64>) {
+    let one = |k: usize| match k {
+        0 => SideCondition::Wall,
+        1 => SideCondition::Pressure { density: 1.01 },
+        _ => SideCondition::Velocity {
+            velocity: [0.02, -0.01],
+        },
+    };
+    if k == 0 {
+        (SideCondition::Periodic, SideCondition::Periodic)
+    } else {
+        (one((k - 1) / 3), one((k - 1) % 3))
+    }
+}
+
+/// The fix-up passes' index arithmetic: for every lattice up to `max`, every combination of side conditions
+/// (periodic, wall, Zou–He pressure, Zou–He velocity on each side, so every corner rule), no obstacle or one
+/// obstacle node anywhere, and every split of the rows into two bands y0..ym, ym..ny:
+/// `classify_special_nodes` lists sorted in-range nodes, and `step_band` + `collide_covered_nodes` (every node
+/// covered) over each band, with that band's `nodes_in_rows` lists, stay in bounds and store finite values.
+/// Choices: nx, ny, x-axis conditions, y-axis conditions, obstacle node (or none), ym.
+/// Runs: 100 Σ_{nx, ny ≤ max} (nx ny + 1)(ny + 1).
+pub fn fix_passes_in_bounds(c: &mut dyn Chooser, max: usize) {
+    let nx = c.usize_in(1, max);
+    let ny = c.usize_in(1, max);
+    let shape = LatticeShape::for_type::<f64>(nx, ny).expect("small shapes are accepted");
+    let (west, east) = axis_conditions(c.usize_in(0, AXIS_CONDITIONS - 1));
+    let (south, north) = axis_conditions(c.usize_in(0, AXIS_CONDITIONS - 1));
+    let bc = Boundaries {
+        west,
+        east,
+        south,
+        north,
+    };
+    assert_eq!(bc.validate(), Ok(()));
+    let obstacle = c.usize_in(0, shape.nodes()); // `nodes()` means none
+    let ym = c.usize_in(0, ny);
+    let flags: Vec<u8> = (0..shape.nodes())
+        .map(|n| if n == obstacle { SOLID } else { FLUID })
+        .collect();
+    let domain = Domain {
+        shape,
+        bc,
+        flags: &flags,
+    };
+    let mut special = vec![u32::MAX; shape.nodes()];
+    let count = classify_special_nodes(&shape, &bc, &flags, &mut special);
+    assert!(count <= shape.nodes());
+    special.truncate(count);
+    assert!(
+        special.windows(2).all(|w| w[0] < w[1]),
+        "sorted, no repeats"
+    );
+    assert!(special.iter().all(|&n| (n as usize) < shape.nodes()));
+    let mut src = vec![0.0; shape.buffer_len()];
+    let feq = equilibrium(1.0, [0.05, 0.02]);
+    for (q, plane) in planes_mut(&shape, &mut src).into_iter().enumerate() {
+        plane.fill(feq[q]);
+    }
+    let nodes: Vec<u32> = (0..shape.nodes() as u32).collect();
+    let offsets: Vec<u32> = (0..=shape.nodes() as u32).collect();
+    let shares = vec![
+        SolidShare {
+            fraction: 0.5,
+            velocity: [0.0, 0.01],
+        };
+        shape.nodes()
+    ];
+    let mut exchange = vec![[f64::NAN; 2]; shape.nodes()];
+    let fluid = FluidParams {
+        tau: 0.8,
+        force: [1e-4, 0.0],
+    };
+    let psm = PsmParams {
+        tau: 0.8,
+        weighting: Weighting::NobleTorczynski,
+        force: [1e-4, 0.0],
+    };
+    let mut dst = vec![f64::NAN; shape.buffer_len()];
+    for (y0, y1) in [(0, ym), (ym, ny)] {
+        let mut band = band_mut(&shape, planes_mut(&shape, &mut dst), y0, y1);
+        let in_band = nodes_in_rows(&shape, &special, y0, y1);
+        step_band(&domain, &src, &mut band, y0, y1, &fluid, in_band);
+        let (lo, hi) = (y0 * nx, y1 * nx);
+        let covered = CoveredNodes {
+            nodes: &nodes[lo..hi],
+            offsets: &offsets[lo..=hi],
+            shares: &shares,
+        };
+        collide_covered_nodes(
+            &domain,
+            &src,
+            &mut band,
+            y0,
+            &psm,
+            covered,
+            &mut exchange[lo..hi],
+        );
+    }
+    for plane in planes(&shape, &dst) {
+        assert!(plane.iter().all(|v| v.is_finite()), "every node stored");
+    }
+    assert!(exchange
+        .iter()
+        .all(|e| e[0].is_finite() && e[1].is_finite()));
 }
