@@ -957,6 +957,45 @@ proptest! {
     }
 }
 
+/// Number of steps of [`several_steps_match_the_reference`].
+const STEPS: usize = 8;
+/// Allowance after [`STEPS`] steps: each step adds at most [`ORACLE`]-sized differences and propagates
+/// earlier ones with a gain of order one (collision weights |1 − ω| ≤ 1; Zou–He closures at most a few), so
+/// 10 × [`ORACLE`] per step is ample while any systematic error would be orders of magnitude larger.
+const ORACLE_STEPS: f64 = 10.0 * STEPS as f64 * ORACLE;
+/// The sane band of Σ|f| per node for the multi-step comparison (the inputs start below 1.6 · 1.05 inside
+/// and ≈ 2.4 at velocity sides).
+const SANE_SCALE: f64 = 4.0;
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(48))]
+
+    /// Several consecutive kernel steps (two-buffer scheme, covered nodes included) stay on the reference
+    /// trajectory. Random, far-from-smooth initial data on tiny lattices can make the dynamics themselves
+    /// unstable (seen: a Zou–He pressure node fully covered by PSM solids, B = 1, walled in by obstacle
+    /// nodes, diverged in a few steps, kernel and reference alike, and was stable without the coverage;
+    /// plausibly because f₀ is not relaxed at B = 1 while the closure keeps re-imposing ρ). Near a
+    /// divergence roundoff is amplified without bound, so the
+    /// comparison stops at the first step whose reference state leaves the sane band [`SANE_SCALE`].
+    #[test]
+    fn several_steps_match_the_reference(nx in 1usize..=12, ny in 1usize..=12, seed in any::<u64>()) {
+        let mut kernel = random_problem(nx, ny, seed, 0.1, 0.3);
+        let mut oracle = kernel.clone();
+        for step in 0..STEPS {
+            kernel.lattice.f = kernel_step::<f64>(&kernel, &[], true).0;
+            oracle.lattice = reference_step(&oracle, true).0;
+            let sane = |f: &[f64; Q]| scale(f).is_finite() && scale(f) <= SANE_SCALE;
+            if !oracle.lattice.f.iter().all(sane) {
+                break;
+            }
+            for (node, (k, r)) in kernel.lattice.f.iter().zip(&oracle.lattice.f).enumerate() {
+                let err = max_abs_diff(k, r);
+                prop_assert!(err <= ORACLE_STEPS * scale(r), "step {step} node {node}: err {err:e}");
+            }
+        }
+    }
+}
+
 /// Body-force-driven Poiseuille flow between half-way bounce-back walls converges to the exact lattice
 /// solution of REFERENCE.md §4.1 (parabola plus the slip (g/ν)(16Λ − 3)/24), for τ on both sides of the
 /// slip-free τ = ½ + √(3/16). The steady LB solution is exact, so the only error is the residual transient

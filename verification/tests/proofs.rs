@@ -91,6 +91,13 @@ fn fix_passes_in_bounds_for_all_side_conditions_obstacles_and_bands() {
     assert_eq!(runs, per_side * per_side * shapes);
 }
 
+#[test]
+fn boundary_validation_for_all_interesting_values() {
+    let runs = for_all(fluid::boundary_validation);
+    let k = lbdem_verification::INTERESTING_F64.len() as u64;
+    assert_eq!(runs, 4 * (k + k * k) + 16);
+}
+
 /// Kani proofs of the same bodies (not run here: Kani cannot be installed on these machines). The layout and
 /// neighbour bodies are loop-free and proved for the same bound (`shape_new_any_size` for every `usize`);
 /// `nodes_in_rows_split` loops over at most `LOOPING_MAX`² nodes and is proved for that smaller bound.

@@ -6,7 +6,7 @@
 //! running the kernels with overflow checks on (the test profile, and Kani's own checks): any overflow panics
 //! and fails the run. Under `for_all` each body is enumerated exhaustively over its bounded choices; under
 //! Kani the same body is a proof over all values in the same ranges.
-use crate::Chooser;
+use crate::{Chooser, INTERESTING_F64};
 use lbdem_kernels::fluid::boundary::{Boundaries, SideCondition};
 use lbdem_kernels::fluid::collide::{PsmParams, SolidShare, Weighting};
 use lbdem_kernels::fluid::d2q9::equilibrium;
@@ -367,4 +367,44 @@ pub fn fix_passes_in_bounds(c: &mut dyn Chooser, max: usize) {
     assert!(exchange
         .iter()
         .all(|e| e[0].is_finite() && e[1].is_finite()));
+}
+
+/// `Boundaries::validate` over the interesting floats ([`INTERESTING_F64`]): one chosen side carries a
+/// pressure (each interesting density) or velocity (each pair of interesting components) condition, the
+/// others are walls; it is accepted exactly when the density is finite and positive, or both velocity
+/// components are finite with magnitude below 1. Then periodic pairing: each side periodic or a wall, accepted
+/// exactly when both sides of each axis agree.
+/// Choices: side, kind, value(s) (4 × (10 + 100) runs), then 2⁴ pairing runs: 456 in all.
+pub fn boundary_validation(c: &mut dyn Chooser) {
+    let v = |c: &mut dyn Chooser| INTERESTING_F64[c.usize_in(0, INTERESTING_F64.len() - 1)];
+    let mut sides = [SideCondition::<f64>::Wall; 4];
+    let expected_ok;
+    if c.boolean() {
+        let side = c.usize_in(0, 3);
+        if c.boolean() {
+            let density = v(c);
+            sides[side] = SideCondition::Pressure { density };
+            expected_ok = density.is_finite() && density > 0.0;
+        } else {
+            let velocity = [v(c), v(c)];
+            sides[side] = SideCondition::Velocity { velocity };
+            expected_ok = velocity.iter().all(|u| u.is_finite() && u.abs() < 1.0);
+        }
+    } else {
+        for s in sides.iter_mut() {
+            if c.boolean() {
+                *s = SideCondition::Periodic;
+            }
+        }
+        let periodic = sides.map(|s| s == SideCondition::Periodic);
+        expected_ok = periodic[0] == periodic[1] && periodic[2] == periodic[3];
+    }
+    let [west, east, south, north] = sides;
+    let bc = Boundaries {
+        west,
+        east,
+        south,
+        north,
+    };
+    assert_eq!(bc.validate().is_ok(), expected_ok, "{bc:?}");
 }
