@@ -1,1 +1,567 @@
+//! Reference (oracle) D2Q9 lattice Boltzmann: plain `f64`, array-of-structs (`Vec<[f64; 9]>`), one node at a
+//! time, **push** streaming. Written to be read, not to be fast; the optimized kernels in `lbdem-kernels` are
+//! tested against it.
+//!
+//! Lattice units throughout: Δx = Δt = 1, c_s² = 1/3, p = ρ/3, ν = (τ − ½)/3.
+//!
+//! * Velocity set (Qian, d'Humières & Lallemand 1992): c₀ = (0,0); c₁ = (1,0), c₂ = (0,1), c₃ = (−1,0),
+//!   c₄ = (0,−1); c₅ = (1,1), c₆ = (−1,1), c₇ = (−1,−1), c₈ = (1,−1); w₀ = 4/9, w₁…₄ = 1/9, w₅…₈ = 1/36.
+//!   The tables are written out here on purpose (not imported from the kernels).
+//! * Equilibrium: f_i^eq(ρ, u) = w_i ρ [1 + 3 c_i·u + 9/2 (c_i·u)² − 3/2 u·u].
+//! * BGK (dissertation eq. 4.1): f_i ← f_i − (f_i − f_i^eq(ρ, u))/τ.
+//! * Guo, Zheng & Shi (2002) forcing with force density F: u = (Σ f_i c_i + F/2)/ρ and the source
+//!   S_i = (1 − 1/(2τ)) w_i [3 (c_i − u) + 9 (c_i·u) c_i]·F.
+//! * Noble–Torczynski PSM (dissertation eq. 4.4–4.8, `REFERENCE.md` §2):
+//!   f_i ← f_i − (1 − B)(f_i − f_i^eq(ρ,u))/τ + Σ_s B_s Ω_{i,s} + (1 − B) S_i with
+//!   Ω_{i,s} = f_ī − f_ī^eq(ρ,u) + f_i^eq(ρ,u_s) − f_i, B = B(min(Σ_s ε_s, 1)) shared as B_s = B ε_s / Σ ε,
+//!   and the force (momentum per step) on solid s, F_s = −B_s Σ_i Ω_{i,s} c_i.
+//! * Zou & He (1997) closures in the transverse-momentum form of Hecht & Harting (2010), written once for a
+//!   side with inward normal n (`REFERENCE.md` §3), and the corner rule of §3.
+//! * A full step in push form: stream (half-way bounce-back from obstacle nodes and wall sides), close the
+//!   Zou–He nodes, collide. See [`step`] for how this lines up with the kernels' fused pull step.
+/// Number of discrete velocities.
+pub const Q: usize = 9;
 
+/// Lattice velocities c_i as (x, y).
+pub const C: [[i64; 2]; Q] = [
+    [0, 0],
+    [1, 0],
+    [0, 1],
+    [-1, 0],
+    [0, -1],
+    [1, 1],
+    [-1, 1],
+    [-1, -1],
+    [1, -1],
+];
+
+/// Lattice weights w_i.
+pub const W: [f64; Q] = [
+    4.0 / 9.0,
+    1.0 / 9.0,
+    1.0 / 9.0,
+    1.0 / 9.0,
+    1.0 / 9.0,
+    1.0 / 36.0,
+    1.0 / 36.0,
+    1.0 / 36.0,
+    1.0 / 36.0,
+];
+
+/// The opposite direction ī of each i: c_ī = −c_i.
+pub const OPPOSITE: [usize; Q] = [0, 3, 4, 1, 2, 7, 8, 5, 6];
+
+/// The populations of one node.
+pub type Populations = [f64; Q];
+
+/// c_i as floating point.
+pub fn c(i: usize) -> [f64; 2] {
+    [C[i][0] as f64, C[i][1] as f64]
+}
+
+/// Density ρ = Σ_i f_i.
+pub fn density(f: &Populations) -> f64 {
+    f.iter().sum()
+}
+
+/// Momentum j = Σ_i f_i c_i.
+pub fn momentum(f: &Populations) -> [f64; 2] {
+    let mut j = [0.0; 2];
+    for (i, fi) in f.iter().enumerate() {
+        j[0] += fi * c(i)[0];
+        j[1] += fi * c(i)[1];
+    }
+    j
+}
+
+/// Second moment Π = Σ_i f_i c_i c_i as (xx, xy, yy).
+pub fn second_moment(f: &Populations) -> [f64; 3] {
+    let mut p = [0.0; 3];
+    for (i, fi) in f.iter().enumerate() {
+        let ci = c(i);
+        p[0] += fi * ci[0] * ci[0];
+        p[1] += fi * ci[0] * ci[1];
+        p[2] += fi * ci[1] * ci[1];
+    }
+    p
+}
+
+/// Second-order equilibrium f_i^eq(ρ, u) = w_i ρ [1 + 3 c_i·u + 9/2 (c_i·u)² − 3/2 u·u].
+pub fn equilibrium(rho: f64, u: [f64; 2]) -> Populations {
+    let mut feq = [0.0; Q];
+    let uu = u[0] * u[0] + u[1] * u[1];
+    for (i, fi) in feq.iter_mut().enumerate() {
+        let cu = c(i)[0] * u[0] + c(i)[1] * u[1];
+        *fi = W[i] * rho * (1.0 + 3.0 * cu + 4.5 * cu * cu - 1.5 * uu);
+    }
+    feq
+}
+
+/// Density and velocity seen by the collision: ρ = Σ f, u = (Σ f c + F/2)/ρ (Guo's half-force shift; with
+/// F = 0 the plain velocity).
+pub fn macroscopic(f: &Populations, force: [f64; 2]) -> (f64, [f64; 2]) {
+    let rho = density(f);
+    let j = momentum(f);
+    (
+        rho,
+        [(j[0] + 0.5 * force[0]) / rho, (j[1] + 0.5 * force[1]) / rho],
+    )
+}
+
+/// Guo source S_i = (1 − 1/(2τ)) w_i [3 (c_i − u) + 9 (c_i·u) c_i]·F.
+pub fn guo_source(tau: f64, u: [f64; 2], force: [f64; 2]) -> Populations {
+    let mut s = [0.0; Q];
+    for (i, si) in s.iter_mut().enumerate() {
+        let ci = c(i);
+        let cu = ci[0] * u[0] + ci[1] * u[1];
+        let ax = 3.0 * (ci[0] - u[0]) + 9.0 * cu * ci[0];
+        let ay = 3.0 * (ci[1] - u[1]) + 9.0 * cu * ci[1];
+        *si = (1.0 - 0.5 / tau) * W[i] * (ax * force[0] + ay * force[1]);
+    }
+    s
+}
+
+/// BGK collision (dissertation eq. 4.1), no body force: f_i − (f_i − f_i^eq(ρ, u))/τ.
+pub fn bgk(f: &Populations, tau: f64) -> Populations {
+    bgk_forced(f, tau, [0.0, 0.0])
+}
+
+/// BGK collision with Guo forcing: f_i − (f_i − f_i^eq(ρ, u))/τ + S_i, u with the half-force shift.
+pub fn bgk_forced(f: &Populations, tau: f64, force: [f64; 2]) -> Populations {
+    let (rho, u) = macroscopic(f, force);
+    let feq = equilibrium(rho, u);
+    let s = guo_source(tau, u, force);
+    let mut out = [0.0; Q];
+    for i in 0..Q {
+        out[i] = f[i] - (f[i] - feq[i]) / tau + s[i];
+    }
+    out
+}
+
+/// The PSM weighting function B(ε, τ).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Weighting {
+    /// Noble & Torczynski (dissertation eq. 4.5): B = ε(τ − ½)/((1 − ε) + (τ − ½)).
+    NobleTorczynski,
+    /// B = ε.
+    SolidFraction,
+}
+
+/// B(ε, τ) for the chosen weighting.
+pub fn weighting(kind: Weighting, eps: f64, tau: f64) -> f64 {
+    match kind {
+        Weighting::NobleTorczynski => eps * (tau - 0.5) / ((1.0 - eps) + (tau - 0.5)),
+        Weighting::SolidFraction => eps,
+    }
+}
+
+/// A solid covering part of a cell: fraction ε_s and velocity u_s at the node.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Solid {
+    /// Solid fraction ε_s of the cell.
+    pub fraction: f64,
+    /// Rigid-body velocity of the solid at the node.
+    pub velocity: [f64; 2],
+}
+
+/// Noble–Torczynski partially-saturated collision of one node with solids `solids` (non-equilibrium
+/// bounce-back Ω₁) and Guo force `force` weighted by (1 − B). Returns the post-collision populations and the
+/// force on each solid, F_s = −B_s Σ_i Ω_{i,s} c_i. With Σ ε_s = 0 it is the BGK collision.
+pub fn psm(
+    f: &Populations,
+    tau: f64,
+    kind: Weighting,
+    force: [f64; 2],
+    solids: &[Solid],
+) -> (Populations, Vec<[f64; 2]>) {
+    let eps_sum: f64 = solids.iter().map(|s| s.fraction).sum();
+    if eps_sum <= 0.0 {
+        return (bgk_forced(f, tau, force), vec![[0.0, 0.0]; solids.len()]);
+    }
+    let b = weighting(kind, eps_sum.min(1.0), tau);
+    let (rho, u) = macroscopic(f, force);
+    let feq = equilibrium(rho, u);
+    let s = guo_source(tau, u, force);
+    let mut out = [0.0; Q];
+    for i in 0..Q {
+        out[i] = f[i] - (1.0 - b) * (f[i] - feq[i]) / tau + (1.0 - b) * s[i];
+    }
+    let mut exchange = Vec::with_capacity(solids.len());
+    for solid in solids {
+        let b_s = b * solid.fraction / eps_sum;
+        let feq_s = equilibrium(rho, solid.velocity);
+        let mut given_to_fluid = [0.0; 2];
+        for i in 0..Q {
+            let o = OPPOSITE[i];
+            let omega_s = f[o] - feq[o] + feq_s[i] - f[i];
+            out[i] += b_s * omega_s;
+            given_to_fluid[0] += b_s * omega_s * c(i)[0];
+            given_to_fluid[1] += b_s * omega_s * c(i)[1];
+        }
+        exchange.push([-given_to_fluid[0], -given_to_fluid[1]]);
+    }
+    (out, exchange)
+}
+
+/// The sides of the rectangle.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Side {
+    /// x = 0
+    West,
+    /// x = nx − 1
+    East,
+    /// y = 0
+    South,
+    /// y = ny − 1
+    North,
+}
+
+impl Side {
+    /// Unit normal pointing into the lattice.
+    pub fn inward(self) -> [i64; 2] {
+        match self {
+            Side::West => [1, 0],
+            Side::East => [-1, 0],
+            Side::South => [0, 1],
+            Side::North => [0, -1],
+        }
+    }
+}
+
+/// What happens at a side.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Condition {
+    /// Periodic (the opposite side must be periodic too).
+    Periodic,
+    /// Half-way bounce-back wall at rest.
+    Wall,
+    /// Zou–He pressure: prescribed density, zero tangential velocity.
+    Pressure(f64),
+    /// Zou–He velocity: prescribed velocity.
+    Velocity([f64; 2]),
+}
+
+impl Condition {
+    fn is_zou_he(self) -> bool {
+        matches!(self, Condition::Pressure(_) | Condition::Velocity(_))
+    }
+}
+
+/// Conditions on the four sides.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Sides {
+    /// x = 0
+    pub west: Condition,
+    /// x = nx − 1
+    pub east: Condition,
+    /// y = 0
+    pub south: Condition,
+    /// y = ny − 1
+    pub north: Condition,
+}
+
+impl Sides {
+    /// Condition of one side.
+    pub fn of(&self, side: Side) -> Condition {
+        match side {
+            Side::West => self.west,
+            Side::East => self.east,
+            Side::South => self.south,
+            Side::North => self.north,
+        }
+    }
+}
+
+fn dot(a: [i64; 2], u: [f64; 2]) -> f64 {
+    a[0] as f64 * u[0] + a[1] as f64 * u[1]
+}
+
+/// The directions entering the lattice through `side` (c_i·n > 0): unknown after streaming.
+pub fn incoming(side: Side) -> Vec<usize> {
+    let n = side.inward();
+    (0..Q)
+        .filter(|&i| C[i][0] * n[0] + C[i][1] * n[1] > 0)
+        .collect()
+}
+
+/// S_∥ + 2 S_out: the populations along the side plus twice those leaving through it; equals ρ(1 − u·n).
+fn known_mass_flux(f: &Populations, side: Side) -> f64 {
+    let n = side.inward();
+    let mut s = 0.0;
+    for (i, fi) in f.iter().enumerate() {
+        match C[i][0] * n[0] + C[i][1] * n[1] {
+            0 => s += fi,
+            k if k < 0 => s += 2.0 * fi,
+            _ => {}
+        }
+    }
+    s
+}
+
+/// Fill the three incoming populations so the node carries density `rho` and velocity `u` (Hecht & Harting's
+/// form): axis f_a = f_ā + (2/3) ρ c_a·u; diagonals f_d = f_d̄ + (1/6) ρ c_d·u − (c_d·t) N_t with t the tangent
+/// and N_t = ½ Σ_{c_j·n = 0} f_j c_j·t − (1/3) ρ u·t, the transverse-momentum correction.
+fn close(f: &mut Populations, side: Side, rho: f64, u: [f64; 2]) {
+    let n = side.inward();
+    let t = [n[1].abs(), n[0].abs()]; // (0,1) for west/east, (1,0) for south/north
+    let mut tangential = 0.0;
+    for (j, fj) in f.iter().enumerate() {
+        if C[j][0] * n[0] + C[j][1] * n[1] == 0 {
+            tangential += fj * (C[j][0] * t[0] + C[j][1] * t[1]) as f64;
+        }
+    }
+    let n_t = 0.5 * tangential - rho * dot(t, u) / 3.0;
+    for i in incoming(side) {
+        let cu = dot(C[i], u);
+        let ct = (C[i][0] * t[0] + C[i][1] * t[1]) as f64;
+        f[i] = if ct == 0.0 {
+            f[OPPOSITE[i]] + 2.0 / 3.0 * rho * cu
+        } else {
+            f[OPPOSITE[i]] + rho * cu / 6.0 - ct * n_t
+        };
+    }
+}
+
+/// Zou–He pressure closure on `side`: the node gets density `rho`, zero tangential velocity, and the normal
+/// velocity u·n = 1 − (S_∥ + 2 S_out)/ρ. Returns the velocity.
+pub fn zou_he_pressure(f: &mut Populations, side: Side, rho: f64) -> [f64; 2] {
+    let n = side.inward();
+    let un = 1.0 - known_mass_flux(f, side) / rho;
+    let u = [un * n[0] as f64, un * n[1] as f64];
+    close(f, side, rho, u);
+    u
+}
+
+/// Zou–He velocity closure on `side`: the node gets velocity `u` and density ρ = (S_∥ + 2 S_out)/(1 − u·n).
+/// Returns the density.
+pub fn zou_he_velocity(f: &mut Populations, side: Side, u: [f64; 2]) -> f64 {
+    let rho = known_mass_flux(f, side) / (1.0 - dot(side.inward(), u));
+    close(f, side, rho, u);
+    rho
+}
+
+/// Corner where two Zou–He sides meet (`REFERENCE.md` §3): with inward normals n_x, n_y and inward diagonal
+/// d = n_x + n_y, f_a = f_ā + (2/3)ρ c_a·u for the two axes, f_d = f_d̄ + (1/6)ρ c_d·u, and the two buried
+/// diagonals e (c_e·n_x and c_e·n_y of opposite signs) share what mass remains:
+/// f_e = ½[ρ − Σ_{others} f] + (1/12) ρ c_e·u.
+pub fn zou_he_corner(f: &mut Populations, x_side: Side, y_side: Side, rho: f64, u: [f64; 2]) {
+    let (nx, ny) = (x_side.inward(), y_side.inward());
+    let d = [nx[0] + ny[0], nx[1] + ny[1]];
+    let dir = |v: [i64; 2]| (0..Q).find(|&i| C[i] == v).expect("a lattice direction");
+    for a in [dir(nx), dir(ny)] {
+        f[a] = f[OPPOSITE[a]] + 2.0 / 3.0 * rho * dot(C[a], u);
+    }
+    let di = dir(d);
+    f[di] = f[OPPOSITE[di]] + rho * dot(C[di], u) / 6.0;
+    let buried: Vec<usize> = (5..Q).filter(|&i| i != di && i != OPPOSITE[di]).collect();
+    let others: f64 = (0..Q).filter(|i| !buried.contains(i)).map(|i| f[i]).sum();
+    let x = 0.5 * (rho - others);
+    for e in buried {
+        f[e] = x + rho * dot(C[e], u) / 12.0;
+    }
+}
+
+/// A lattice state: post-collision populations of every node (node (x, y) at `y * nx + x`) and the obstacle
+/// flags (`true` = fixed solid obstacle node).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Lattice {
+    /// Nodes along x.
+    pub nx: usize,
+    /// Nodes along y.
+    pub ny: usize,
+    /// Populations per node.
+    pub f: Vec<Populations>,
+    /// Obstacle flag per node.
+    pub solid: Vec<bool>,
+}
+
+/// Moving-solid coverage of one node for the reference step: node index and the solids covering it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Covered {
+    /// Node index y * nx + x.
+    pub node: usize,
+    /// Solids covering the node.
+    pub solids: Vec<Solid>,
+}
+
+/// Collision parameters of a reference step.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Params {
+    /// Relaxation time τ.
+    pub tau: f64,
+    /// Body-force density (Guo).
+    pub force: [f64; 2],
+    /// PSM weighting for covered nodes.
+    pub weighting: Weighting,
+}
+
+impl Lattice {
+    /// Node index of (x, y).
+    pub fn index(&self, x: usize, y: usize) -> usize {
+        y * self.nx + x
+    }
+
+    /// Where a population pushed from (x, y) along c_q lands: `Some(node)` inside (wrapping across periodic
+    /// sides), `None` if it leaves through a non-periodic side.
+    pub fn destination(&self, x: usize, y: usize, q: usize, sides: &Sides) -> Option<usize> {
+        let tx = x as i64 + C[q][0];
+        let ty = y as i64 + C[q][1];
+        let (nx, ny) = (self.nx as i64, self.ny as i64);
+        let tx = if (0..nx).contains(&tx) {
+            tx
+        } else if sides.west == Condition::Periodic {
+            tx.rem_euclid(nx)
+        } else {
+            return None;
+        };
+        let ty = if (0..ny).contains(&ty) {
+            ty
+        } else if sides.south == Condition::Periodic {
+            ty.rem_euclid(ny)
+        } else {
+            return None;
+        };
+        Some(self.index(tx as usize, ty as usize))
+    }
+}
+
+/// Push streaming with half-way bounce-back. Every fluid node pushes each population f_q to its neighbour
+/// x + c_q; if that neighbour is an obstacle node, or the population leaves through a non-periodic side, it
+/// comes back reversed at the same node: f_q̄(x) ← f_q(x). (Through a Zou–He side the reversed population is
+/// unknown; it is filled with the bounce-back value here and overwritten by the closure in [`close_zou_he`].)
+/// Obstacle nodes push nothing and are left as NaN (the caller overwrites them).
+pub fn stream(lat: &Lattice, sides: &Sides) -> Vec<Populations> {
+    let mut out = vec![[f64::NAN; Q]; lat.nx * lat.ny];
+    for y in 0..lat.ny {
+        for x in 0..lat.nx {
+            let here = lat.index(x, y);
+            if lat.solid[here] {
+                continue;
+            }
+            for q in 0..Q {
+                match lat.destination(x, y, q, sides) {
+                    Some(there) if !lat.solid[there] => out[there][q] = lat.f[here][q],
+                    _ => out[here][OPPOSITE[q]] = lat.f[here][q],
+                }
+            }
+        }
+    }
+    out
+}
+
+/// The Zou–He side of node (x, y) along x and along y, if any. A node on both opposite sides (a lattice one
+/// node wide) takes West (resp. South), as the kernels do.
+fn zou_he_sides(lat: &Lattice, x: usize, y: usize, sides: &Sides) -> (Option<Side>, Option<Side>) {
+    let xs = if x == 0 && sides.west.is_zou_he() {
+        Some(Side::West)
+    } else if x == lat.nx - 1 && sides.east.is_zou_he() {
+        Some(Side::East)
+    } else {
+        None
+    };
+    let ys = if y == 0 && sides.south.is_zou_he() {
+        Some(Side::South)
+    } else if y == lat.ny - 1 && sides.north.is_zou_he() {
+        Some(Side::North)
+    } else {
+        None
+    };
+    (xs, ys)
+}
+
+/// Close the Zou–He nodes of the streamed populations `streamed` (from state `before`, needed for the corner
+/// density between two velocity sides). Obstacle nodes are skipped.
+///
+/// Corner conventions (documented in the kernels' `boundary` module): a Zou–He side meeting a wall keeps the
+/// wall's bounce-back and applies the Zou–He side's closure; two Zou–He sides use [`zou_he_corner`] with
+/// ρ = the prescribed density (mean of two pressure sides) or, for two velocity sides, the density of the
+/// diagonal interior neighbour in `before` (1 if it is an obstacle node), and u = the prescribed velocity of a
+/// velocity side, else 0.
+pub fn close_zou_he(before: &Lattice, streamed: &mut [Populations], sides: &Sides) {
+    for y in 0..before.ny {
+        for x in 0..before.nx {
+            let here = before.index(x, y);
+            if before.solid[here] {
+                continue;
+            }
+            let f = &mut streamed[here];
+            match zou_he_sides(before, x, y, sides) {
+                (None, None) => {}
+                (Some(s), None) | (None, Some(s)) => match sides.of(s) {
+                    Condition::Pressure(rho) => {
+                        zou_he_pressure(f, s, rho);
+                    }
+                    Condition::Velocity(u) => {
+                        zou_he_velocity(f, s, u);
+                    }
+                    _ => unreachable!("only Zou–He sides are returned"),
+                },
+                (Some(sx), Some(sy)) => {
+                    let rho = match (sides.of(sx), sides.of(sy)) {
+                        (Condition::Pressure(a), Condition::Pressure(b)) => 0.5 * (a + b),
+                        (Condition::Pressure(a), _) | (_, Condition::Pressure(a)) => a,
+                        _ => {
+                            let n = [sx.inward(), sy.inward()];
+                            let ix = (x as i64 + n[0][0]).clamp(0, before.nx as i64 - 1) as usize;
+                            let iy = (y as i64 + n[1][1]).clamp(0, before.ny as i64 - 1) as usize;
+                            let j = before.index(ix, iy);
+                            if before.solid[j] {
+                                1.0
+                            } else {
+                                density(&before.f[j])
+                            }
+                        }
+                    };
+                    let u = match (sides.of(sx), sides.of(sy)) {
+                        (Condition::Velocity(u), _) | (_, Condition::Velocity(u)) => u,
+                        _ => [0.0, 0.0],
+                    };
+                    zou_he_corner(f, sx, sy, rho, u);
+                }
+            }
+        }
+    }
+}
+
+/// One reference step from the post-collision state `lat`: stream (push, with bounce-back), close the
+/// Zou–He nodes, collide (BGK or forced BGK; PSM at the `covered` nodes). Obstacle nodes end at the rest
+/// equilibrium f^eq(1, 0) (the kernels' convention, so no garbage is ever stored). Returns the new state and,
+/// per entry of `covered`, the force on each of its solids (zero at obstacle nodes).
+///
+/// This is the kernels' fused pull step in a different order of operations: pulling f_q(x) = f_q(x − c_q)
+/// gives the same streamed populations as pushing f_q(x − c_q) to x, and bounce-back reads the same value,
+/// so "reference `step` on S" and "kernel step on S" must agree to roundoff.
+pub fn step(
+    lat: &Lattice,
+    sides: &Sides,
+    params: &Params,
+    covered: &[Covered],
+) -> (Lattice, Vec<Vec<[f64; 2]>>) {
+    let mut streamed = stream(lat, sides);
+    close_zou_he(lat, &mut streamed, sides);
+    let mut next = lat.clone();
+    for (n, f) in streamed.iter().enumerate() {
+        next.f[n] = if lat.solid[n] {
+            equilibrium(1.0, [0.0, 0.0])
+        } else {
+            bgk_forced(f, params.tau, params.force)
+        };
+    }
+    let mut forces = Vec::with_capacity(covered.len());
+    for cov in covered {
+        if lat.solid[cov.node] {
+            forces.push(vec![[0.0, 0.0]; cov.solids.len()]);
+            continue;
+        }
+        let (f, ex) = psm(
+            &streamed[cov.node],
+            params.tau,
+            params.weighting,
+            params.force,
+            &cov.solids,
+        );
+        next.f[cov.node] = f;
+        forces.push(ex);
+    }
+    (next, forces)
+}

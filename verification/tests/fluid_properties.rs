@@ -1,0 +1,1057 @@
+//! Property tests of the D2Q9 fluid kernels (`lbdem_kernels::fluid`) over random input, and the optimized
+//! kernels against the `f64` reference oracle (`lbdem_reference::lbm`).
+//!
+//! Inputs: populations near equilibrium, f_i = f_i^eq(ρ, u) (1 + δ_i) with ρ ∈ [0.5, 1.5], |u| ≤ 0.2 and
+//! |δ_i| ≤ 0.05; τ ∈ [0.51, 2]; force densities |F_a| ≤ 1e-3; solid fractions in [0, 1] (sums may exceed 1,
+//! to exercise the cap), solid velocities |u_s| ≤ 0.2; lattices from 1×1 to 12×12 with random obstacle
+//! flags and random side conditions. Whole lattices are filled from a seeded SplitMix64 stream so a failing
+//! case is reproduced by its seed.
+//!
+//! **Tolerances.** Every quantity is an O(1) combination of at most a few dozen correctly rounded operations
+//! on values of the order of the node density ρ, so its roundoff is at most a few tens of ulp of ρ.
+//! * [`ROUNDOFF`] = 64 ε ρ (ε = 2⁻⁵², i.e. ≈ 1.4e−14 ρ) for conservation laws and prescribed boundary values:
+//!   a 9-term sum of populations each carrying ≤ 4 ulp of error gives ≤ 36 ulp; 64 leaves margin.
+//! * [`ORACLE`] = 1e−12 ρ for kernel-versus-reference: the two evaluate the same formulas in different orders
+//!   (and the reference's Zou–He is the transverse-momentum form), so they differ by roundoff only; 1e−12 is
+//!   ~100× the worst roundoff seen and ~1e6 below the size of any formula error with these perturbations.
+//!   Whole steps are single steps, so errors do not compound.
+//! * Bitwise (`to_bits`) where the claim is exact: PSM with ε = 0 versus BGK, streaming as a permutation,
+//!   band splitting.
+use lbdem_kernels::fluid::boundary::{zou_he, zou_he_corner, Boundaries, SideCondition};
+use lbdem_kernels::fluid::collide::{
+    bgk_collide, bgk_collide_forced, bgk_collide_slices, psm_collide, PsmParams, SolidShare,
+    Weighting,
+};
+use lbdem_kernels::fluid::d2q9::{density, equilibrium, momentum, second_moment, OPPOSITE, Q};
+use lbdem_kernels::fluid::lattice::{LatticeShape, Side};
+use lbdem_kernels::fluid::step::{
+    band_mut, classify_special_nodes, collide_covered_nodes, gather_node, gathered_moments,
+    nodes_in_rows, planes, planes_mut, step_band, stream_periodic, CoveredNodes, Domain,
+    FluidParams, FLUID, SOLID,
+};
+use lbdem_kernels::Real;
+use lbdem_reference::analytic;
+use lbdem_reference::lbm as reference;
+use proptest::prelude::*;
+
+/// Roundoff allowance for conservation laws and prescribed values, relative to the node density.
+const ROUNDOFF: f64 = 64.0 * f64::EPSILON;
+/// Allowance for optimized kernel versus reference oracle, relative to the node density.
+const ORACLE: f64 = 1e-12;
+/// Allowance for the `f32` kernels versus the `f64` reference, relative to the node density: the inputs
+/// are rounded to `f32` (½ ulp each) and a step is a few tens of `f32` operations on O(ρ) values, so
+/// 64 ulp of `f32` (≈ 7.6e−6); Zou–He pressure sides recover u·n = 1 − S/ρ by cancellation, which the margin
+/// covers.
+const ORACLE_F32: f64 = 64.0 * f32::EPSILON as f64;
+
+// ---------------------------------------------------------------------------------------------------------
+// Input generation
+// ---------------------------------------------------------------------------------------------------------
+
+/// SplitMix64 (Steele, Lea & Flood 2014): a tiny seeded generator for filling whole lattices.
+struct SplitMix(u64);
+
+impl SplitMix {
+    fn next(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^ (z >> 31)
+    }
+    /// Uniform in [0, 1).
+    fn unit(&mut self) -> f64 {
+        (self.next() >> 11) as f64 / (1u64 << 53) as f64
+    }
+    fn range(&mut self, lo: f64, hi: f64) -> f64 {
+        lo + (hi - lo) * self.unit()
+    }
+    fn below(&mut self, n: usize) -> usize {
+        (self.next() % n as u64) as usize
+    }
+    fn chance(&mut self, p: f64) -> bool {
+        self.unit() < p
+    }
+    /// A velocity with |u| ≤ 0.2.
+    fn velocity(&mut self) -> [f64; 2] {
+        let (r, a) = (
+            0.2 * self.unit().sqrt(),
+            self.range(0.0, std::f64::consts::TAU),
+        );
+        [r * a.cos(), r * a.sin()]
+    }
+    /// Populations near equilibrium: f^eq(ρ, u)(1 + δ), ρ ∈ [0.5, 1.5], |u| ≤ 0.2, |δ_i| ≤ 0.05.
+    fn populations(&mut self) -> [f64; Q] {
+        let (rho, u) = (self.range(0.5, 1.5), self.velocity());
+        let feq = reference::equilibrium(rho, u);
+        core::array::from_fn(|i| feq[i] * (1.0 + self.range(-0.05, 0.05)))
+    }
+    /// A solid fraction in [0, 1], exactly 0 or 1 now and then.
+    fn fraction(&mut self) -> f64 {
+        match self.below(6) {
+            0 => 0.0,
+            1 => 1.0,
+            _ => self.unit(),
+        }
+    }
+}
+
+fn node_populations() -> impl Strategy<Value = [f64; Q]> {
+    any::<u64>().prop_map(|s| SplitMix(s).populations())
+}
+
+fn tau() -> impl Strategy<Value = f64> {
+    0.51f64..=2.0
+}
+
+fn force() -> impl Strategy<Value = [f64; 2]> {
+    [-1e-3f64..=1e-3, -1e-3f64..=1e-3]
+}
+
+fn velocity() -> impl Strategy<Value = [f64; 2]> {
+    any::<u64>().prop_map(|s| SplitMix(s).velocity())
+}
+
+fn weighting() -> impl Strategy<Value = Weighting> {
+    prop_oneof![
+        Just(Weighting::NobleTorczynski),
+        Just(Weighting::SolidFraction)
+    ]
+}
+
+fn shares() -> impl Strategy<Value = Vec<SolidShare<f64>>> {
+    (1usize..=3, any::<u64>()).prop_map(|(n, s)| {
+        let mut rng = SplitMix(s);
+        (0..n)
+            .map(|_| SolidShare {
+                fraction: rng.fraction(),
+                velocity: rng.velocity(),
+            })
+            .collect()
+    })
+}
+
+fn to_reference_weighting(w: Weighting) -> reference::Weighting {
+    match w {
+        Weighting::NobleTorczynski => reference::Weighting::NobleTorczynski,
+        Weighting::SolidFraction => reference::Weighting::SolidFraction,
+    }
+}
+
+fn to_reference_solids(shares: &[SolidShare<f64>]) -> Vec<reference::Solid> {
+    shares
+        .iter()
+        .map(|s| reference::Solid {
+            fraction: s.fraction,
+            velocity: s.velocity,
+        })
+        .collect()
+}
+
+/// Σ|f_i|: the scale of a node's roundoff (≈ ρ near equilibrium).
+fn scale(f: &[f64; Q]) -> f64 {
+    f.iter().map(|v| v.abs()).sum()
+}
+
+/// The largest |a_i − b_i|; infinite if any difference is NaN (`f64::max` would silently drop it) or the
+/// lengths differ.
+fn max_abs_diff(a: &[f64], b: &[f64]) -> f64 {
+    if a.len() != b.len() {
+        return f64::INFINITY;
+    }
+    let mut m = 0.0f64;
+    for (x, y) in a.iter().zip(b) {
+        let d = (x - y).abs();
+        if d.is_nan() {
+            return f64::INFINITY;
+        }
+        m = m.max(d);
+    }
+    m
+}
+
+// ---------------------------------------------------------------------------------------------------------
+// Collision operators
+// ---------------------------------------------------------------------------------------------------------
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(256))]
+
+    /// f^eq(ρ, u) has moments ρ, ρu and Π = ρ/3 I + ρ u u.
+    #[test]
+    fn equilibrium_has_the_right_moments(rho in 0.5f64..=1.5, u in velocity()) {
+        let feq = equilibrium(rho, u);
+        let tol = ROUNDOFF * rho;
+        prop_assert!((density(&feq) - rho).abs() <= tol);
+        let j = momentum(&feq);
+        prop_assert!((j[0] - rho * u[0]).abs() <= tol && (j[1] - rho * u[1]).abs() <= tol);
+        let p = second_moment(&feq);
+        let expected = [rho / 3.0 + rho * u[0] * u[0], rho * u[0] * u[1], rho / 3.0 + rho * u[1] * u[1]];
+        for (got, want) in p.iter().zip(expected) {
+            prop_assert!((got - want).abs() <= tol, "Π {got} vs {want}");
+        }
+    }
+
+    /// BGK conserves mass and momentum to roundoff, and equals the reference BGK.
+    #[test]
+    fn bgk_conserves_mass_and_momentum(f in node_populations(), tau in tau()) {
+        let mut g = f;
+        bgk_collide(&mut g, 1.0 / tau);
+        let tol = ROUNDOFF * scale(&f);
+        prop_assert!((density(&g) - density(&f)).abs() <= tol);
+        let (j0, j1) = (momentum(&f), momentum(&g));
+        prop_assert!((j1[0] - j0[0]).abs() <= tol && (j1[1] - j0[1]).abs() <= tol);
+        let r = reference::bgk(&f, tau);
+        prop_assert!(max_abs_diff(&g, &r) <= ORACLE * scale(&f));
+    }
+
+    /// Guo-forced BGK adds no mass and exactly F of momentum; it equals the reference.
+    #[test]
+    fn forced_bgk_adds_exactly_the_force(f in node_populations(), tau in tau(), force in force()) {
+        let mut g = f;
+        bgk_collide_forced(&mut g, 1.0 / tau, force);
+        let tol = ROUNDOFF * scale(&f);
+        prop_assert!((density(&g) - density(&f)).abs() <= tol);
+        let (j0, j1) = (momentum(&f), momentum(&g));
+        for a in 0..2 {
+            prop_assert!((j1[a] - j0[a] - force[a]).abs() <= tol, "axis {a}");
+        }
+        let r = reference::bgk_forced(&f, tau, force);
+        prop_assert!(max_abs_diff(&g, &r) <= ORACLE * scale(&f));
+    }
+
+    /// PSM conserves mass; the fluid momentum change is (1 − B) F minus the momentum handed to the solids
+    /// (Σ exchange), so with no body force momentum is exchanged, never created. Equals the reference,
+    /// exchange included.
+    #[test]
+    fn psm_exchanges_momentum_with_the_solids(
+        f in node_populations(), tau in tau(), shares in shares(), w in weighting(),
+        forced in any::<bool>(), force in force(),
+    ) {
+        let force = if forced { force } else { [0.0; 2] };
+        let params = PsmParams { tau, weighting: w, force };
+        let mut g = f;
+        let mut exchange = vec![[f64::NAN; 2]; shares.len()];
+        let b = psm_collide(&mut g, &params, &shares, &mut exchange);
+        prop_assert!((0.0..=1.0).contains(&b));
+        let tol = ROUNDOFF * scale(&f);
+        prop_assert!((density(&g) - density(&f)).abs() <= tol);
+        let (j0, j1) = (momentum(&f), momentum(&g));
+        for a in 0..2 {
+            let handed: f64 = exchange.iter().map(|e| e[a]).sum();
+            let expected = (1.0 - b) * force[a] - handed;
+            prop_assert!((j1[a] - j0[a] - expected).abs() <= tol, "axis {a}");
+        }
+        if !forced {
+            // REFERENCE.md §2.3: with Ω₁ and no forcing, F_s = B_s ρ (u − u_s) for any populations.
+            let (rho, j) = (density(&f), momentum(&f));
+            let eps: f64 = shares.iter().map(|s| s.fraction).sum();
+            for (s, e) in shares.iter().zip(&exchange) {
+                let b_s = if eps > 0.0 { b * s.fraction / eps } else { 0.0 };
+                for a in 0..2 {
+                    let want = b_s * (j[a] - rho * s.velocity[a]);
+                    prop_assert!((e[a] - want).abs() <= tol, "F_s {e:?} axis {a} vs {want}");
+                }
+            }
+        }
+        let (r, ex) = reference::psm(&f, tau, to_reference_weighting(w), force, &to_reference_solids(&shares));
+        prop_assert!(max_abs_diff(&g, &r) <= ORACLE * scale(&f));
+        for (k, e) in exchange.iter().zip(&ex) {
+            prop_assert!(max_abs_diff(k, e) <= ORACLE * scale(&f));
+        }
+    }
+
+    /// PSM with every solid fraction zero is bitwise the (forced) BGK collision and hands nothing over.
+    #[test]
+    fn psm_with_zero_solid_fraction_is_bitwise_bgk(
+        f in node_populations(), tau in tau(), n in 0usize..=3, w in weighting(), u_s in velocity(),
+        forced in any::<bool>(), force in force(),
+    ) {
+        let force = if forced { force } else { [0.0; 2] };
+        let shares = vec![SolidShare { fraction: 0.0, velocity: u_s }; n];
+        let mut exchange = vec![[f64::NAN; 2]; n];
+        let mut g = f;
+        let b = psm_collide(&mut g, &PsmParams { tau, weighting: w, force }, &shares, &mut exchange);
+        let mut h = f;
+        if forced {
+            bgk_collide_forced(&mut h, 1.0 / tau, force);
+        } else {
+            bgk_collide(&mut h, 1.0 / tau);
+        }
+        prop_assert_eq!(b, 0.0);
+        prop_assert_eq!(g.map(f64::to_bits), h.map(f64::to_bits));
+        prop_assert!(exchange.iter().all(|e| *e == [0.0, 0.0]));
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(64))]
+
+    /// `bgk_collide_slices` applies the node collision (plain or forced) to every node of structure-of-arrays
+    /// planes: equal to the reference node by node.
+    #[test]
+    fn bgk_collide_slices_matches_the_reference(
+        n in 0usize..=40, seed in any::<u64>(), tau in tau(), forced in any::<bool>(), force in force(),
+    ) {
+        let force = if forced { force } else { [0.0; 2] };
+        let mut rng = SplitMix(seed);
+        let nodes: Vec<[f64; Q]> = (0..n).map(|_| rng.populations()).collect();
+        let mut planes: Vec<Vec<f64>> = (0..Q).map(|q| nodes.iter().map(|f| f[q]).collect()).collect();
+        {
+            let mut it = planes.iter_mut();
+            let slices: [&mut [f64]; Q] = core::array::from_fn(|_| it.next().map(|v| v.as_mut_slice()).unwrap_or_default());
+            bgk_collide_slices(slices, 1.0 / tau, force);
+        }
+        for (k, f) in nodes.iter().enumerate() {
+            let got: [f64; Q] = core::array::from_fn(|q| planes[q][k]);
+            let want = reference::bgk_forced(f, tau, force);
+            prop_assert!(max_abs_diff(&got, &want) <= ORACLE * scale(f), "node {k}");
+        }
+    }
+}
+
+/// REFERENCE.md §2.3 sign test: with Ω₁ and no forcing, a fully covered node (B = 1, ε = 1) at equilibrium
+/// with velocity u hands the solid F = ρ (u − u_s): the fluid drags the solid along.
+#[test]
+fn psm_force_on_a_fully_covered_node_drags_the_solid_along() {
+    let (rho, u, u_s): (f64, [f64; 2], [f64; 2]) = (1.1, [0.05, -0.02], [-0.01, 0.03]);
+    let mut f = equilibrium(rho, u);
+    let mut ex = [[0.0; 2]; 1];
+    let shares = [SolidShare {
+        fraction: 1.0,
+        velocity: u_s,
+    }];
+    let params = PsmParams {
+        tau: 0.8,
+        weighting: Weighting::NobleTorczynski,
+        force: [0.0; 2],
+    };
+    let b = psm_collide(&mut f, &params, &shares, &mut ex);
+    assert_eq!(b, 1.0);
+    for a in 0..2 {
+        assert!((ex[0][a] - rho * (u[a] - u_s[a])).abs() <= ROUNDOFF * rho);
+    }
+}
+
+// ---------------------------------------------------------------------------------------------------------
+// Lattices: conversion between the kernel layout and the reference
+// ---------------------------------------------------------------------------------------------------------
+
+/// A random lattice problem: reference state, kernel side conditions, and coverage.
+#[derive(Debug, Clone)]
+struct Problem {
+    lattice: reference::Lattice,
+    bc: Boundaries<f64>,
+    tau: f64,
+    force: [f64; 2],
+    weighting: Weighting,
+    /// Covered nodes, increasing, with their shares.
+    covered: Vec<(u32, Vec<SolidShare<f64>>)>,
+}
+
+fn random_side(rng: &mut SplitMix) -> SideCondition<f64> {
+    match rng.below(3) {
+        0 => SideCondition::Wall,
+        1 => SideCondition::Pressure {
+            density: rng.range(0.8, 1.2),
+        },
+        _ => SideCondition::Velocity {
+            velocity: rng.velocity(),
+        },
+    }
+}
+
+/// A random problem on an nx × ny lattice: obstacle nodes with probability `p_solid` (their populations NaN,
+/// so any read of them shows), each axis periodic or with independent wall / pressure / velocity sides,
+/// coverage with probability `p_covered`.
+fn random_problem(nx: usize, ny: usize, seed: u64, p_solid: f64, p_covered: f64) -> Problem {
+    let mut rng = SplitMix(seed);
+    let n = nx * ny;
+    let solid: Vec<bool> = (0..n).map(|_| rng.chance(p_solid)).collect();
+    let f = solid
+        .iter()
+        .map(|&s| if s { [f64::NAN; Q] } else { rng.populations() })
+        .collect();
+    let (west, east) = if rng.chance(0.3) {
+        (SideCondition::Periodic, SideCondition::Periodic)
+    } else {
+        (random_side(&mut rng), random_side(&mut rng))
+    };
+    let (south, north) = if rng.chance(0.3) {
+        (SideCondition::Periodic, SideCondition::Periodic)
+    } else {
+        (random_side(&mut rng), random_side(&mut rng))
+    };
+    let bc = Boundaries {
+        west,
+        east,
+        south,
+        north,
+    };
+    assert_eq!(bc.validate(), Ok(()));
+    let tau = rng.range(0.51, 2.0);
+    let force = if rng.chance(0.5) {
+        [rng.range(-1e-3, 1e-3), rng.range(-1e-3, 1e-3)]
+    } else {
+        [0.0; 2]
+    };
+    let weighting = if rng.chance(0.5) {
+        Weighting::NobleTorczynski
+    } else {
+        Weighting::SolidFraction
+    };
+    let mut covered = Vec::new();
+    for node in 0..n {
+        if rng.chance(p_covered) {
+            let k = 1 + rng.below(3);
+            let shares = (0..k)
+                .map(|_| SolidShare {
+                    fraction: rng.fraction(),
+                    velocity: rng.velocity(),
+                })
+                .collect();
+            covered.push((node as u32, shares));
+        }
+    }
+    Problem {
+        lattice: reference::Lattice { nx, ny, f, solid },
+        bc,
+        tau,
+        force,
+        weighting,
+        covered,
+    }
+}
+
+fn to_reference_condition(c: SideCondition<f64>) -> reference::Condition {
+    match c {
+        SideCondition::Periodic => reference::Condition::Periodic,
+        SideCondition::Wall => reference::Condition::Wall,
+        SideCondition::Pressure { density } => reference::Condition::Pressure(density),
+        SideCondition::Velocity { velocity } => reference::Condition::Velocity(velocity),
+    }
+}
+
+fn to_reference_sides(bc: &Boundaries<f64>) -> reference::Sides {
+    reference::Sides {
+        west: to_reference_condition(bc.west),
+        east: to_reference_condition(bc.east),
+        south: to_reference_condition(bc.south),
+        north: to_reference_condition(bc.north),
+    }
+}
+
+/// The kernel population buffer of a reference state (padding NaN).
+fn to_buffer<T: Real>(shape: &LatticeShape, f: &[[f64; Q]]) -> Vec<T> {
+    let mut buf = vec![T::nan(); shape.buffer_len()];
+    for (q, plane) in planes_mut(shape, &mut buf).into_iter().enumerate() {
+        for (node, v) in plane.iter_mut().enumerate() {
+            *v = T::lit(f[node][q]);
+        }
+    }
+    buf
+}
+
+fn from_buffer<T: Real>(shape: &LatticeShape, buf: &[T]) -> Vec<[f64; Q]> {
+    let p = planes(shape, buf);
+    (0..shape.nodes())
+        .map(|node| core::array::from_fn(|q| p[q][node].to_f64_exact()))
+        .collect()
+}
+
+fn side_in<T: Real>(c: SideCondition<f64>) -> SideCondition<T> {
+    match c {
+        SideCondition::Periodic => SideCondition::Periodic,
+        SideCondition::Wall => SideCondition::Wall,
+        SideCondition::Pressure { density } => SideCondition::Pressure {
+            density: T::lit(density),
+        },
+        SideCondition::Velocity { velocity } => SideCondition::Velocity {
+            velocity: velocity.map(T::lit),
+        },
+    }
+}
+
+/// The kernel step of a problem with the rows split at `cuts` (a band per consecutive pair; 0 and ny are
+/// added): per band, `step_band` with that band's special nodes, then, if `with_coverage`,
+/// `collide_covered_nodes` with that band's covered nodes and exchange entries. Returns the new populations
+/// and the exchange per share.
+fn kernel_step<T: Real>(
+    p: &Problem,
+    cuts: &[usize],
+    with_coverage: bool,
+) -> (Vec<[f64; Q]>, Vec<[f64; 2]>) {
+    let (nx, ny) = (p.lattice.nx, p.lattice.ny);
+    let shape = LatticeShape::for_type::<T>(nx, ny).expect("small lattice");
+    let bc = Boundaries {
+        west: side_in::<T>(p.bc.west),
+        east: side_in::<T>(p.bc.east),
+        south: side_in::<T>(p.bc.south),
+        north: side_in::<T>(p.bc.north),
+    };
+    let (tau, force) = (T::lit(p.tau), p.force.map(T::lit));
+    let flags: Vec<u8> = p
+        .lattice
+        .solid
+        .iter()
+        .map(|&s| if s { SOLID } else { FLUID })
+        .collect();
+    let domain = Domain {
+        shape,
+        bc,
+        flags: &flags,
+    };
+    let src = to_buffer::<T>(&shape, &p.lattice.f);
+    let mut special = vec![0u32; shape.nodes()];
+    let count = classify_special_nodes(&shape, &bc, &flags, &mut special);
+    special.truncate(count);
+    let fluid = FluidParams { tau, force };
+    let psm = PsmParams {
+        tau,
+        weighting: p.weighting,
+        force,
+    };
+    // Compressed-row coverage.
+    let nodes: Vec<u32> = p.covered.iter().map(|(n, _)| *n).collect();
+    let mut offsets = vec![0u32];
+    let mut shares = Vec::new();
+    for (_, s) in &p.covered {
+        shares.extend(s.iter().map(|s| SolidShare {
+            fraction: T::lit(s.fraction),
+            velocity: s.velocity.map(T::lit),
+        }));
+        offsets.push(shares.len() as u32);
+    }
+    let mut exchange = vec![[T::nan(); 2]; shares.len()];
+    let mut rows = vec![0];
+    rows.extend_from_slice(cuts);
+    rows.push(ny);
+    let mut dst = vec![T::nan(); shape.buffer_len()];
+    for w in rows.windows(2) {
+        let (y0, y1) = (w[0], w[1]);
+        let mut band = band_mut(&shape, planes_mut(&shape, &mut dst), y0, y1);
+        step_band(
+            &domain,
+            &src,
+            &mut band,
+            y0,
+            y1,
+            &fluid,
+            nodes_in_rows(&shape, &special, y0, y1),
+        );
+        if with_coverage {
+            let lo = nodes.partition_point(|&n| (n as usize) < y0 * nx);
+            let hi = nodes.partition_point(|&n| (n as usize) < y1 * nx);
+            let covered = CoveredNodes {
+                nodes: &nodes[lo..hi],
+                offsets: &offsets[lo..=hi],
+                shares: &shares,
+            };
+            let (a, b) = (offsets[lo] as usize, offsets[hi] as usize);
+            collide_covered_nodes(
+                &domain,
+                &src,
+                &mut band,
+                y0,
+                &psm,
+                covered,
+                &mut exchange[a..b],
+            );
+        }
+    }
+    let exchange = exchange
+        .iter()
+        .map(|e| e.map(|v| v.to_f64_exact()))
+        .collect();
+    (from_buffer(&shape, &dst), exchange)
+}
+
+fn reference_step(p: &Problem, with_coverage: bool) -> (reference::Lattice, Vec<Vec<[f64; 2]>>) {
+    let params = reference::Params {
+        tau: p.tau,
+        force: p.force,
+        weighting: to_reference_weighting(p.weighting),
+    };
+    let covered: Vec<reference::Covered> = if with_coverage {
+        p.covered
+            .iter()
+            .map(|(n, s)| reference::Covered {
+                node: *n as usize,
+                solids: to_reference_solids(s),
+            })
+            .collect()
+    } else {
+        Vec::new()
+    };
+    reference::step(&p.lattice, &to_reference_sides(&p.bc), &params, &covered)
+}
+
+/// Kernel step in precision `T` versus reference step, node by node, within `tol` relative to the reference
+/// node's Σ|f| (≈ ρ). The exchange is compared within `tol` × 2.5, a bound on the density of any node
+/// (ρ ≤ 1.5 · 1.05 inside; up to (1.5 · 1.05)/(1 − 0.2) at velocity sides).
+fn compare_steps<T: Real>(p: &Problem, with_coverage: bool, tol: f64) -> Result<(), TestCaseError> {
+    let (kf, kex) = kernel_step::<T>(p, &[], with_coverage);
+    let (r, rex) = reference_step(p, with_coverage);
+    for (node, (k, rf)) in kf.iter().zip(&r.f).enumerate() {
+        let (x, y) = (node % p.lattice.nx, node / p.lattice.nx);
+        let err = max_abs_diff(k, rf);
+        prop_assert!(
+            err <= tol * scale(rf),
+            "node ({x},{y}) solid={} err={err:e}\nkernel {k:?}\nreference {rf:?}",
+            p.lattice.solid[node]
+        );
+    }
+    let rex: Vec<[f64; 2]> = rex.into_iter().flatten().collect();
+    prop_assert_eq!(kex.len(), rex.len());
+    for (k, e) in kex.iter().zip(&rex) {
+        prop_assert!(max_abs_diff(k, e) <= tol * 2.5, "exchange {k:?} vs {e:?}");
+    }
+    Ok(())
+}
+
+/// What a node on Zou–He sides must hold after the gather: density and velocity components, where
+/// prescribed.
+struct EdgeState {
+    density: Option<f64>,
+    velocity: [Option<f64>; 2],
+}
+
+/// The prescribed state of node (x, y), or `None` if it lies on no Zou–He side. One Zou–He side (possibly
+/// meeting a wall): a pressure side fixes ρ and a zero tangential velocity, a velocity side fixes u. Two
+/// Zou–He sides (the corner rule): ρ is the prescribed density (the mean of two pressures; not fixed
+/// for two velocity sides), u the velocity of a velocity side, else zero. On a lattice one node wide the
+/// West (South) side is the node's side, as in the kernels.
+fn expected_edge_state(
+    bc: &Boundaries<f64>,
+    nx: usize,
+    ny: usize,
+    x: usize,
+    y: usize,
+) -> Option<EdgeState> {
+    let zou_he = |c: SideCondition<f64>| c.is_zou_he().then_some(c);
+    let xs = if x == 0 && bc.west.is_zou_he() {
+        zou_he(bc.west)
+    } else if x + 1 == nx {
+        zou_he(bc.east)
+    } else {
+        None
+    };
+    let ys = if y == 0 && bc.south.is_zou_he() {
+        zou_he(bc.south)
+    } else if y + 1 == ny {
+        zou_he(bc.north)
+    } else {
+        None
+    };
+    let state = match (xs, ys) {
+        (None, None) => return None,
+        (Some(c), None) | (None, Some(c)) => {
+            let normal = usize::from(xs.is_none()); // 0 (x) for West/East, 1 (y) for South/North
+            match c {
+                SideCondition::Pressure { density } => {
+                    let mut velocity = [None; 2];
+                    velocity[1 - normal] = Some(0.0); // zero tangential velocity
+                    EdgeState {
+                        density: Some(density),
+                        velocity,
+                    }
+                }
+                SideCondition::Velocity { velocity } => EdgeState {
+                    density: None,
+                    velocity: velocity.map(Some),
+                },
+                _ => unreachable!("only Zou–He sides"),
+            }
+        }
+        (Some(a), Some(b)) => {
+            use SideCondition::{Pressure, Velocity};
+            let density = match (a, b) {
+                (Pressure { density: d1 }, Pressure { density: d2 }) => Some(0.5 * (d1 + d2)),
+                (Pressure { density }, _) | (_, Pressure { density }) => Some(density),
+                _ => None,
+            };
+            let u = match (a, b) {
+                (Velocity { velocity }, _) | (_, Velocity { velocity }) => velocity,
+                _ => [0.0; 2],
+            };
+            EdgeState {
+                density,
+                velocity: u.map(Some),
+            }
+        }
+    };
+    Some(state)
+}
+
+// ---------------------------------------------------------------------------------------------------------
+// Streaming, boundaries, whole steps
+// ---------------------------------------------------------------------------------------------------------
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(128))]
+
+    /// Periodic streaming is a permutation within each population plane (the sorted bit patterns of every
+    /// plane are unchanged, so its sum is too), and streaming with the directions reversed undoes it bitwise.
+    #[test]
+    fn periodic_streaming_is_a_reversible_permutation(nx in 1usize..=12, ny in 1usize..=12, seed in any::<u64>()) {
+        let shape = LatticeShape::for_type::<f64>(nx, ny).expect("small lattice");
+        let mut rng = SplitMix(seed);
+        let state: Vec<[f64; Q]> = (0..nx * ny).map(|_| rng.populations()).collect();
+        let src = to_buffer::<f64>(&shape, &state);
+        let mut dst = vec![f64::NAN; shape.buffer_len()];
+        stream_periodic(&shape, &src, &mut planes_mut(&shape, &mut dst));
+        let (before, after) = (planes(&shape, &src), planes(&shape, &dst));
+        for q in 0..Q {
+            let mut a: Vec<u64> = before[q].iter().map(|v| v.to_bits()).collect();
+            let mut b: Vec<u64> = after[q].iter().map(|v| v.to_bits()).collect();
+            a.sort_unstable();
+            b.sort_unstable();
+            prop_assert_eq!(a, b, "plane {} is not a permutation", q);
+        }
+        // Reverse: plane q of the streamed state moved by c_q; putting it in plane q̄ moves it by −c_q.
+        let streamed = from_buffer(&shape, &dst);
+        let swapped: Vec<[f64; Q]> = streamed.iter().map(|f| core::array::from_fn(|q| f[OPPOSITE[q]])).collect();
+        let src2 = to_buffer::<f64>(&shape, &swapped);
+        let mut back = vec![f64::NAN; shape.buffer_len()];
+        stream_periodic(&shape, &src2, &mut planes_mut(&shape, &mut back));
+        let restored: Vec<[f64; Q]> =
+            from_buffer(&shape, &back).iter().map(|f| core::array::from_fn(|q| f[OPPOSITE[q]])).collect();
+        for (r, s) in restored.iter().zip(&state) {
+            prop_assert_eq!(r.map(f64::to_bits), s.map(f64::to_bits));
+        }
+    }
+
+    /// Zou–He on each side: the node ends at exactly the prescribed density (pressure: with zero tangential
+    /// velocity) or velocity, the populations not entering through the side are untouched bitwise, and the
+    /// kernel closure equals the reference's transverse-momentum form.
+    #[test]
+    fn zou_he_side_imposes_the_prescribed_state(
+        f in node_populations(), side in 0usize..4, pressure in any::<bool>(),
+        rho0 in 0.5f64..=1.5, u0 in velocity(),
+    ) {
+        let (side, rside) = [
+            (Side::West, reference::Side::West),
+            (Side::East, reference::Side::East),
+            (Side::South, reference::Side::South),
+            (Side::North, reference::Side::North),
+        ][side];
+        let mut g = f;
+        let mut r = f;
+        if pressure {
+            zou_he(&mut g, side, SideCondition::Pressure { density: rho0 });
+            reference::zou_he_pressure(&mut r, rside, rho0);
+        } else {
+            zou_he(&mut g, side, SideCondition::Velocity { velocity: u0 });
+            reference::zou_he_velocity(&mut r, rside, u0);
+        }
+        let unknown = reference::incoming(rside);
+        prop_assert_eq!(unknown.len(), 3);
+        for i in (0..Q).filter(|i| !unknown.contains(i)) {
+            prop_assert_eq!(g[i].to_bits(), f[i].to_bits(), "known f_{} changed", i);
+        }
+        let rho = density(&g);
+        let j = momentum(&g);
+        let tol = ROUNDOFF * scale(&g);
+        if pressure {
+            prop_assert!((rho - rho0).abs() <= tol, "density {rho} vs {rho0}");
+            let tangential = if matches!(side, Side::West | Side::East) { j[1] } else { j[0] };
+            prop_assert!(tangential.abs() <= tol, "tangential momentum {tangential}");
+        } else {
+            for a in 0..2 {
+                prop_assert!((j[a] - rho * u0[a]).abs() <= tol, "momentum {j:?} vs ρu {rho} {u0:?}");
+            }
+        }
+        prop_assert!(max_abs_diff(&g, &r) <= ORACLE * scale(&f));
+    }
+
+    /// Zou–He corners (two Zou–He sides): the node ends at exactly ρ and u, the four known populations (rest,
+    /// and the three leaving through the sides) are untouched, and the kernel equals the reference rule.
+    #[test]
+    fn zou_he_corner_imposes_density_and_velocity(
+        f in node_populations(), corner in 0usize..4, rho0 in 0.5f64..=1.5, u0 in velocity(),
+    ) {
+        let (sx, sy, rx, ry) = [
+            (Side::West, Side::South, reference::Side::West, reference::Side::South),
+            (Side::East, Side::South, reference::Side::East, reference::Side::South),
+            (Side::West, Side::North, reference::Side::West, reference::Side::North),
+            (Side::East, Side::North, reference::Side::East, reference::Side::North),
+        ][corner];
+        let mut g = f;
+        zou_he_corner(&mut g, sx, sy, rho0, u0);
+        let mut r = f;
+        reference::zou_he_corner(&mut r, rx, ry, rho0, u0);
+        // Known: the populations entering through neither side (rest, and the three leaving the corner).
+        let (in_x, in_y) = (reference::incoming(rx), reference::incoming(ry));
+        let known: Vec<usize> = (0..Q).filter(|i| !in_x.contains(i) && !in_y.contains(i)).collect();
+        prop_assert_eq!(known.len(), 4);
+        for &i in &known {
+            prop_assert_eq!(g[i].to_bits(), f[i].to_bits(), "known f_{} changed", i);
+        }
+        let rho = density(&g);
+        let j = momentum(&g);
+        let tol = ROUNDOFF * scale(&g);
+        prop_assert!((rho - rho0).abs() <= tol, "density {rho} vs {rho0}");
+        for a in 0..2 {
+            prop_assert!((j[a] - rho0 * u0[a]).abs() <= tol, "momentum {j:?} vs ρu");
+        }
+        prop_assert!(max_abs_diff(&g, &r) <= ORACLE * scale(&f));
+    }
+
+    /// On a whole lattice with Zou–He and wall sides, the general gather leaves every fluid node of a Zou–He
+    /// side at its prescribed state (see [`expected_edge_state`]), including corners where a Zou–He side meets
+    /// a wall or another Zou–He side.
+    #[test]
+    fn gather_node_closes_every_zou_he_node(nx in 1usize..=12, ny in 1usize..=12, seed in any::<u64>()) {
+        let mut p = random_problem(nx, ny, seed, 0.15, 0.0);
+        let mut rng = SplitMix(seed ^ 0x5EED);
+        let mut side = || match rng.below(5) {
+            0 => SideCondition::Wall,
+            1 | 2 => SideCondition::Pressure { density: rng.range(0.8, 1.2) },
+            _ => SideCondition::Velocity { velocity: rng.velocity() },
+        };
+        p.bc = Boundaries { west: side(), east: side(), south: side(), north: side() };
+        let shape = LatticeShape::for_type::<f64>(nx, ny).expect("small lattice");
+        let flags: Vec<u8> = p.lattice.solid.iter().map(|&s| if s { SOLID } else { FLUID }).collect();
+        let src = to_buffer::<f64>(&shape, &p.lattice.f);
+        for y in 0..ny {
+            for x in 0..nx {
+                if flags[shape.index(x, y)] == SOLID {
+                    continue;
+                }
+                let Some(want) = expected_edge_state(&p.bc, nx, ny, x, y) else { continue };
+                let g = gather_node(&shape, &src, &p.bc, &flags, x, y);
+                let (rho, j) = (density(&g), momentum(&g));
+                let tol = ROUNDOFF * scale(&g);
+                if let Some(rho0) = want.density {
+                    prop_assert!((rho - rho0).abs() <= tol, "({x},{y}) density {rho} vs {rho0}");
+                }
+                for a in 0..2 {
+                    if let Some(ua) = want.velocity[a] {
+                        prop_assert!((j[a] - rho * ua).abs() <= tol, "({x},{y}) momentum {j:?} axis {a} vs ρ {ua}");
+                    }
+                }
+            }
+        }
+    }
+
+    /// `step_band` over the whole lattice equals the reference step (stream with bounce-back, Zou–He, BGK) on
+    /// random lattices with obstacle nodes and random side conditions.
+    #[test]
+    fn step_band_matches_the_reference(nx in 1usize..=12, ny in 1usize..=12, seed in any::<u64>()) {
+        let p = random_problem(nx, ny, seed, 0.15, 0.0);
+        compare_steps::<f64>(&p, false, ORACLE)?;
+    }
+
+    /// `step_band` followed by `collide_covered_nodes` equals the reference step with PSM at the covered
+    /// nodes, populations and momentum exchange per solid share.
+    #[test]
+    fn covered_nodes_match_the_reference(nx in 1usize..=12, ny in 1usize..=12, seed in any::<u64>()) {
+        let p = random_problem(nx, ny, seed, 0.1, 0.3);
+        compare_steps::<f64>(&p, true, ORACLE)?;
+    }
+
+    /// Updating the lattice as several bands (as threads do) gives bitwise the result of one band,
+    /// populations and exchange, for any split of the rows (empty bands included).
+    #[test]
+    fn bands_are_independent(
+        nx in 1usize..=12, ny in 1usize..=12, seed in any::<u64>(),
+        cuts in prop::collection::vec(0usize..=12, 0..4),
+    ) {
+        let p = random_problem(nx, ny, seed, 0.1, 0.3);
+        let mut cuts: Vec<usize> = cuts.into_iter().map(|c| c.min(ny)).collect();
+        cuts.sort_unstable();
+        let (one, ex1) = kernel_step::<f64>(&p, &[], true);
+        let (many, ex2) = kernel_step::<f64>(&p, &cuts, true);
+        for (a, b) in one.iter().zip(&many) {
+            prop_assert_eq!(a.map(f64::to_bits), b.map(f64::to_bits));
+        }
+        prop_assert_eq!(
+            ex1.iter().flatten().map(|v| v.to_bits()).collect::<Vec<_>>(),
+            ex2.iter().flatten().map(|v| v.to_bits()).collect::<Vec<_>>()
+        );
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(128))]
+
+    /// `gathered_moments` (the moments the next collision sees) equals ρ and the half-force-shifted u of the
+    /// reference's streamed and closed populations; obstacle nodes report ρ = 1, u = 0.
+    #[test]
+    fn gathered_moments_match_the_reference(nx in 1usize..=12, ny in 1usize..=12, seed in any::<u64>()) {
+        let p = random_problem(nx, ny, seed, 0.15, 0.0);
+        let shape = LatticeShape::for_type::<f64>(nx, ny).expect("small lattice");
+        let flags: Vec<u8> = p.lattice.solid.iter().map(|&s| if s { SOLID } else { FLUID }).collect();
+        let src = to_buffer::<f64>(&shape, &p.lattice.f);
+        let mut rho = vec![f64::NAN; shape.nodes()];
+        let mut u = vec![[f64::NAN; 2]; shape.nodes()];
+        gathered_moments(&shape, &src, &p.bc, &flags, p.force, &mut rho, &mut u);
+        let sides = to_reference_sides(&p.bc);
+        let mut streamed = reference::stream(&p.lattice, &sides);
+        reference::close_zou_he(&p.lattice, &mut streamed, &sides);
+        for n in 0..shape.nodes() {
+            let (r_rho, r_u) = if p.lattice.solid[n] {
+                (1.0, [0.0; 2])
+            } else {
+                reference::macroscopic(&streamed[n], p.force)
+            };
+            prop_assert!(max_abs_diff(&[rho[n], u[n][0], u[n][1]], &[r_rho, r_u[0], r_u[1]]) <= ORACLE * r_rho.max(1.0), "node {n}");
+        }
+    }
+
+    /// A whole step conserves the fluid mass of a lattice closed by walls, periodic sides and obstacle nodes
+    /// (bounce-back returns every population), and on a fully periodic lattice without obstacles it adds
+    /// exactly N F of momentum. Roundoff: each node contributes ≤ 64 ulp of its Σ|f| and the global sums add
+    /// ≤ 9N ulp of the total, so 1e−12 of the total (N ≤ 144) is a safe bound.
+    #[test]
+    fn whole_step_conserves_mass_and_momentum(nx in 1usize..=12, ny in 1usize..=12, seed in any::<u64>(), periodic in any::<bool>()) {
+        let mut p = random_problem(nx, ny, seed, if periodic { 0.0 } else { 0.15 }, 0.0);
+        // Close the lattice: every side periodic, or Zou–He (open) sides replaced by walls.
+        let close = |c: SideCondition<f64>| {
+            if periodic {
+                SideCondition::Periodic
+            } else if c.is_zou_he() {
+                SideCondition::Wall
+            } else {
+                c
+            }
+        };
+        p.bc = Boundaries {
+            west: close(p.bc.west),
+            east: close(p.bc.east),
+            south: close(p.bc.south),
+            north: close(p.bc.north),
+        };
+        prop_assert_eq!(p.bc.validate(), Ok(()));
+        let (after, _) = kernel_step::<f64>(&p, &[], false);
+        let fluid = |f: &[[f64; Q]]| -> (f64, [f64; 2], f64) {
+            let mut total = (0.0, [0.0; 2], 0.0);
+            for (n, fi) in f.iter().enumerate() {
+                if !p.lattice.solid[n] {
+                    total.0 += density(fi);
+                    let j = momentum(fi);
+                    total.1[0] += j[0];
+                    total.1[1] += j[1];
+                    total.2 += scale(fi);
+                }
+            }
+            total
+        };
+        let (m0, j0, s0) = fluid(&p.lattice.f);
+        let (m1, j1, _) = fluid(&after);
+        prop_assert!((m1 - m0).abs() <= 1e-12 * s0, "mass {m0} -> {m1}");
+        if periodic {
+            let nodes = (nx * ny) as f64;
+            for a in 0..2 {
+                prop_assert!((j1[a] - j0[a] - nodes * p.force[a]).abs() <= 1e-12 * s0, "momentum axis {a}");
+            }
+        }
+    }
+
+    /// The `f32` instantiation of the step (bulk, special and covered nodes) agrees with the `f64` reference
+    /// within [`ORACLE_F32`].
+    #[test]
+    fn f32_step_matches_the_reference(nx in 1usize..=12, ny in 1usize..=12, seed in any::<u64>()) {
+        let p = random_problem(nx, ny, seed, 0.1, 0.3);
+        compare_steps::<f32>(&p, true, ORACLE_F32)?;
+    }
+}
+
+/// Number of steps of [`several_steps_match_the_reference`].
+const STEPS: usize = 8;
+/// Allowance after [`STEPS`] steps: each step adds at most [`ORACLE`]-sized differences and propagates
+/// earlier ones with a gain of order one (collision weights |1 − ω| ≤ 1; Zou–He closures at most a few), so
+/// 10 × [`ORACLE`] per step is ample while any systematic error would be orders of magnitude larger.
+const ORACLE_STEPS: f64 = 10.0 * STEPS as f64 * ORACLE;
+/// The sane band of Σ|f| per node for the multi-step comparison (the inputs start below 1.6 · 1.05 inside
+/// and ≈ 2.4 at velocity sides).
+const SANE_SCALE: f64 = 4.0;
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(48))]
+
+    /// Several consecutive kernel steps (two-buffer scheme, covered nodes included) stay on the reference
+    /// trajectory. Random, far-from-smooth initial data on tiny lattices can make the dynamics themselves
+    /// unstable (seen: a Zou–He pressure node fully covered by PSM solids, B = 1, walled in by obstacle
+    /// nodes, diverged in a few steps, kernel and reference alike, and was stable without the coverage;
+    /// plausibly because f₀ is not relaxed at B = 1 while the closure keeps re-imposing ρ). Near a
+    /// divergence roundoff is amplified without bound, so the
+    /// comparison stops at the first step whose reference state leaves the sane band [`SANE_SCALE`].
+    #[test]
+    fn several_steps_match_the_reference(nx in 1usize..=12, ny in 1usize..=12, seed in any::<u64>()) {
+        let mut kernel = random_problem(nx, ny, seed, 0.1, 0.3);
+        let mut oracle = kernel.clone();
+        for step in 0..STEPS {
+            kernel.lattice.f = kernel_step::<f64>(&kernel, &[], true).0;
+            oracle.lattice = reference_step(&oracle, true).0;
+            let sane = |f: &[f64; Q]| scale(f).is_finite() && scale(f) <= SANE_SCALE;
+            if !oracle.lattice.f.iter().all(sane) {
+                break;
+            }
+            for (node, (k, r)) in kernel.lattice.f.iter().zip(&oracle.lattice.f).enumerate() {
+                let err = max_abs_diff(k, r);
+                prop_assert!(err <= ORACLE_STEPS * scale(r), "step {step} node {node}: err {err:e}");
+            }
+        }
+    }
+}
+
+/// Body-force-driven Poiseuille flow between half-way bounce-back walls converges to the exact lattice
+/// solution of REFERENCE.md §4.1 (parabola plus the slip (g/ν)(16Λ − 3)/24), for τ on both sides of the
+/// slip-free τ = ½ + √(3/16). The steady LB solution is exact, so the only error is the residual transient
+/// (e^{−νπ²t/H²} after t steps, < 1e−12 here) and roundoff: tolerance 1e−9 of the centreline velocity.
+#[test]
+fn body_force_poiseuille_matches_the_slip_formula() {
+    let (nx, ny, g) = (1, 8, 1e-6);
+    let shape = LatticeShape::for_type::<f64>(nx, ny).expect("small lattice");
+    let bc = Boundaries {
+        west: SideCondition::Periodic,
+        east: SideCondition::Periodic,
+        south: SideCondition::Wall,
+        north: SideCondition::Wall,
+    };
+    let flags = vec![FLUID; shape.nodes()];
+    let domain = Domain {
+        shape,
+        bc,
+        flags: &flags,
+    };
+    let mut special = vec![0u32; shape.nodes()];
+    let count = classify_special_nodes(&shape, &bc, &flags, &mut special);
+    special.truncate(count);
+    for tau in [0.6, 0.8, 1.0, 1.5] {
+        let params = FluidParams {
+            tau,
+            force: [g, 0.0],
+        };
+        let rest = equilibrium(1.0, [0.0; 2]);
+        let mut a = to_buffer::<f64>(&shape, &vec![rest; shape.nodes()]);
+        let mut b = a.clone();
+        for _ in 0..12_000 {
+            step_band(
+                &domain,
+                &a,
+                &mut planes_mut(&shape, &mut b),
+                0,
+                ny,
+                &params,
+                &special,
+            );
+            std::mem::swap(&mut a, &mut b);
+        }
+        let mut rho = vec![0.0; shape.nodes()];
+        let mut u = vec![[0.0; 2]; shape.nodes()];
+        gathered_moments(&shape, &a, &bc, &flags, [g, 0.0], &mut rho, &mut u);
+        let u_max =
+            analytic::poiseuille_max_velocity(g, analytic::lattice_viscosity(tau), ny as f64);
+        for (j, uj) in u.iter().enumerate() {
+            let exact = analytic::lattice_poiseuille_velocity(g, tau, ny, j);
+            assert!(
+                (uj[0] - exact).abs() <= 1e-9 * u_max,
+                "τ={tau} node {j}: {} vs {exact}",
+                uj[0]
+            );
+            assert!(uj[1].abs() <= 1e-9 * u_max);
+        }
+    }
+}
