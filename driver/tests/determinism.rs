@@ -1,7 +1,7 @@
 //! Same scene ⇒ bitwise-identical results whatever the number of threads or the band size (DESIGN §4).
 use lbdem::lattice::{FluidDisc, FluidLattice};
 use lbdem_kernels::fluid::boundary::{Boundaries, SideCondition};
-use lbdem_kernels::fluid::collide::Weighting;
+use lbdem_kernels::fluid::collide::{SolidOperator, Weighting};
 use lbdem_kernels::fluid::step::FluidParams;
 use lbdem_kernels::Real;
 
@@ -88,4 +88,103 @@ fn one_and_two_threads_give_bitwise_identical_results_f32() {
     let (b, fb) = run::<f32>(2, 4);
     assert!(bitwise_equal(&a, &b));
     assert_eq!(fa, fb);
+}
+
+#[test]
+fn solids_never_cover_zou_he_nodes_and_a_disc_on_the_inlet_stays_finite() {
+    // A disc straddling the pressure inlet: its cells on the inlet column are left to the Zou–He closure.
+    let bc = Boundaries {
+        west: SideCondition::Pressure { density: 1.02 },
+        east: SideCondition::Pressure { density: 0.98 },
+        south: SideCondition::Wall,
+        north: SideCondition::Wall,
+    };
+    let params = FluidParams {
+        tau: 0.6,
+        force: [0.0; 2],
+    };
+    let mut lattice = FluidLattice::<f64>::new(30, 20, bc, params).unwrap();
+    // Ω₂: Ω₁ would also drift here (see the next test), which is a different matter from Zou–He coverage.
+    lattice.set_solid_operator(SolidOperator::Superposition);
+    let disc = FluidDisc {
+        center: [0.5, 10.0],
+        radius: 4.0,
+        velocity: [0.0; 2],
+        spin: 0.0,
+    };
+    lattice.cover_with_discs(&[disc], Weighting::NobleTorczynski);
+    assert!(lattice.covered_nodes() > 0);
+    for _ in 0..2000 {
+        lattice.step();
+    }
+    // Stays within the driver's sane band [0.5, 1.5]. (A solid touching a Zou–He side does excite a slowly
+    // decaying density excursion, measured up to 10 % at a 4 % drop: scenes keep solids a few nodes away
+    // from pressure boundaries, as the dissertation's lattice extends beyond the grains.)
+    let bad = lattice.health_check(0.5, 1.5);
+    assert!(bad.is_none(), "inlet disc destabilised the run: {bad:?}");
+    let (rho, _) = lattice.moments();
+    for y in 0..20 {
+        // The closure still holds the inlet column at the prescribed density.
+        assert!((rho[lattice.shape().index(0, y)] - 1.02).abs() < 1e-12);
+    }
+}
+
+/// Fluid mass after `steps / 2` and `steps` steps, and the rest population at a fully covered node inside a
+/// fixed disc at the end, in an open channel (Zou–He pressure ends), with the given solid operator.
+fn open_channel_with_disc(op: SolidOperator, steps: usize) -> (f64, f64, f64) {
+    let bc = Boundaries {
+        west: SideCondition::Pressure { density: 1.02 },
+        east: SideCondition::Pressure { density: 0.98 },
+        south: SideCondition::Wall,
+        north: SideCondition::Wall,
+    };
+    let params = FluidParams {
+        tau: 0.6,
+        force: [0.0; 2],
+    };
+    let mut lattice = FluidLattice::<f64>::new(30, 20, bc, params).unwrap();
+    lattice.set_solid_operator(op);
+    let disc = FluidDisc {
+        center: [8.5, 10.0],
+        radius: 4.0,
+        velocity: [0.0; 2],
+        spin: 0.0,
+    };
+    lattice.cover_with_discs(&[disc], Weighting::NobleTorczynski);
+    for _ in 0..steps / 2 {
+        lattice.step();
+    }
+    let half = lattice.mass();
+    for _ in steps / 2..steps {
+        lattice.step();
+    }
+    let n = lattice.shape().index(8, 10);
+    (half, lattice.mass(), lattice.populations()[n])
+}
+
+#[test]
+fn nt_operator_accumulates_mass_inside_solids_of_open_systems_and_superposition_does_not() {
+    // Ω₁ (eq. 4.6) at B = 1 adds (2/3)ρu² to the rest population every step and never relaxes it: in an open
+    // channel the rest population of a fully covered node grows linearly (measured: 0.444 → 0.59 in 20 000
+    // steps). This characterises the dissertation's operator; if it stops drifting, the kernel changed.
+    let (m0, m1, f0) = open_channel_with_disc(SolidOperator::NonEquilibriumBounceBack, 10_000);
+    assert!(
+        f0 > 0.49,
+        "rest population {f0}: expected the Ω₁ drift above 0.49 after 10 000 steps"
+    );
+    // Measured growth ≈ 2.5e-4 per step between steps 5 000 and 40 000 (mass ≈ 600).
+    assert!(
+        m1 - m0 > 0.5,
+        "Ω₁: mass {m0} -> {m1} between steps 5 000 and 10 000 expected to grow"
+    );
+    // Ω₂ relaxes every population: after the acoustic transient the mass settles and stops changing.
+    let (ma, mb, f0b) = open_channel_with_disc(SolidOperator::Superposition, 10_000);
+    assert!(
+        ((mb - ma) / ma).abs() < 1e-6,
+        "Ω₂: mass still changing {ma} -> {mb}"
+    );
+    assert!(
+        (f0b - 4.0 / 9.0).abs() < 0.01,
+        "Ω₂: rest population {f0b} should stay near 4/9"
+    );
 }

@@ -174,6 +174,20 @@ pub fn psm(
     force: [f64; 2],
     solids: &[Solid],
 ) -> (Populations, Vec<[f64; 2]>) {
+    psm_with_operator(f, tau, kind, false, force, solids)
+}
+
+/// As [`psm`], with the solid operator chosen: `superposition = false` is Ω₁ (non-equilibrium bounce-back,
+/// Ω_i = f_ī − f_ī^eq(ρ,u) + f_i^eq(ρ,u_s) − f_i), `true` is Ω₂ (Holdych's superposition,
+/// Ω_i = f_i^eq(ρ,u_s) − f_i + (1 − 1/τ)(f_i − f_i^eq(ρ,u))).
+pub fn psm_with_operator(
+    f: &Populations,
+    tau: f64,
+    kind: Weighting,
+    superposition: bool,
+    force: [f64; 2],
+    solids: &[Solid],
+) -> (Populations, Vec<[f64; 2]>) {
     let eps_sum: f64 = solids.iter().map(|s| s.fraction).sum();
     if eps_sum <= 0.0 {
         return (bgk_forced(f, tau, force), vec![[0.0, 0.0]; solids.len()]);
@@ -193,7 +207,11 @@ pub fn psm(
         let mut given_to_fluid = [0.0; 2];
         for i in 0..Q {
             let o = OPPOSITE[i];
-            let omega_s = f[o] - feq[o] + feq_s[i] - f[i];
+            let omega_s = if superposition {
+                feq_s[i] - f[i] + (1.0 - 1.0 / tau) * (f[i] - feq[i])
+            } else {
+                f[o] - feq[o] + feq_s[i] - f[i]
+            };
             out[i] += b_s * omega_s;
             given_to_fluid[0] += b_s * omega_s * c(i)[0];
             given_to_fluid[1] += b_s * omega_s * c(i)[1];

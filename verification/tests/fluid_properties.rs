@@ -19,8 +19,8 @@
 //!   band splitting.
 use lbdem_kernels::fluid::boundary::{zou_he, zou_he_corner, Boundaries, SideCondition};
 use lbdem_kernels::fluid::collide::{
-    bgk_collide, bgk_collide_forced, bgk_collide_slices, psm_collide, PsmParams, SolidShare,
-    Weighting,
+    bgk_collide, bgk_collide_forced, bgk_collide_slices, psm_collide, PsmParams, SolidOperator,
+    SolidShare, Weighting,
 };
 use lbdem_kernels::fluid::d2q9::{density, equilibrium, momentum, second_moment, OPPOSITE, Q};
 use lbdem_kernels::fluid::lattice::{LatticeShape, Side};
@@ -222,14 +222,15 @@ proptest! {
 
     /// PSM conserves mass; the fluid momentum change is (1 − B) F minus the momentum handed to the solids
     /// (Σ exchange), so with no body force momentum is exchanged, never created. Equals the reference,
-    /// exchange included.
+    /// exchange included. Both solid operators (Ω₁ non-equilibrium bounce-back, Ω₂ superposition).
     #[test]
     fn psm_exchanges_momentum_with_the_solids(
         f in node_populations(), tau in tau(), shares in shares(), w in weighting(),
-        forced in any::<bool>(), force in force(),
+        forced in any::<bool>(), force in force(), superposition in any::<bool>(),
     ) {
         let force = if forced { force } else { [0.0; 2] };
-        let params = PsmParams { tau, weighting: w, force };
+        let solid = if superposition { SolidOperator::Superposition } else { SolidOperator::NonEquilibriumBounceBack };
+        let params = PsmParams { tau, weighting: w, force, solid };
         let mut g = f;
         let mut exchange = vec![[f64::NAN; 2]; shares.len()];
         let b = psm_collide(&mut g, &params, &shares, &mut exchange);
@@ -243,7 +244,7 @@ proptest! {
             prop_assert!((j1[a] - j0[a] - expected).abs() <= tol, "axis {a}");
         }
         if !forced {
-            // REFERENCE.md §2.3: with Ω₁ and no forcing, F_s = B_s ρ (u − u_s) for any populations.
+            // REFERENCE.md §2.2–2.3: with Ω₁ or Ω₂ and no forcing, F_s = B_s ρ (u − u_s) for any populations.
             let (rho, j) = (density(&f), momentum(&f));
             let eps: f64 = shares.iter().map(|s| s.fraction).sum();
             for (s, e) in shares.iter().zip(&exchange) {
@@ -254,7 +255,9 @@ proptest! {
                 }
             }
         }
-        let (r, ex) = reference::psm(&f, tau, to_reference_weighting(w), force, &to_reference_solids(&shares));
+        let (r, ex) = reference::psm_with_operator(
+            &f, tau, to_reference_weighting(w), superposition, force, &to_reference_solids(&shares),
+        );
         prop_assert!(max_abs_diff(&g, &r) <= ORACLE * scale(&f));
         for (k, e) in exchange.iter().zip(&ex) {
             prop_assert!(max_abs_diff(k, e) <= ORACLE * scale(&f));
@@ -271,7 +274,7 @@ proptest! {
         let shares = vec![SolidShare { fraction: 0.0, velocity: u_s }; n];
         let mut exchange = vec![[f64::NAN; 2]; n];
         let mut g = f;
-        let b = psm_collide(&mut g, &PsmParams { tau, weighting: w, force }, &shares, &mut exchange);
+        let b = psm_collide(&mut g, &PsmParams { tau, weighting: w, force, solid: SolidOperator::NonEquilibriumBounceBack }, &shares, &mut exchange);
         let mut h = f;
         if forced {
             bgk_collide_forced(&mut h, 1.0 / tau, force);
@@ -325,6 +328,7 @@ fn psm_force_on_a_fully_covered_node_drags_the_solid_along() {
         tau: 0.8,
         weighting: Weighting::NobleTorczynski,
         force: [0.0; 2],
+        solid: SolidOperator::NonEquilibriumBounceBack,
     };
     let b = psm_collide(&mut f, &params, &shares, &mut ex);
     assert_eq!(b, 1.0);
@@ -510,6 +514,7 @@ fn kernel_step<T: Real>(
         tau,
         weighting: p.weighting,
         force,
+        solid: SolidOperator::NonEquilibriumBounceBack,
     };
     // Compressed-row coverage.
     let nodes: Vec<u32> = p.covered.iter().map(|(n, _)| *n).collect();

@@ -8,6 +8,13 @@
 //!   f_i ← f_i − (1 − B) ω (f_i − f_i^eq(ρ, u)) + Σ_s B_s Ω^S_{i,s} + (1 − B) S_i,
 //!   Ω^S_{i,s} = f_ī − f_ī^eq(ρ, u) + f_i^eq(ρ, u_s) − f_i  (the "non-equilibrium bounce-back", Ω₁),
 //!   with B the weighting of eq. 4.5, B(ε, τ) = ε(τ − ½)/((1 − ε) + (τ − ½)), or optionally B = ε.
+//!   The solid operator Ω^S can be Ω₁ above (eq. 4.6, the dissertation's and the default), or the
+//!   "superposition" operator Ω₂ of Holdych (2003) / Owen, Leonardi & Feng (2011, eq. 29):
+//!   Ω^S_{i,s} = f_i^eq(ρ, u_s) − f_i + (1 − ω)(f_i − f_i^eq(ρ, u)). Both conserve mass and hand the solid
+//!   the same momentum ρ(u − u_s) per unit B without forcing. They differ at fully covered nodes (B = 1): Ω₁
+//!   never relaxes the rest population, which gains (2/3)ρu² every step wherever the pre-collision velocity
+//!   inside a solid is non-zero, so in open systems (pressure boundaries) mass accumulates without bound inside
+//!   solids; Ω₂ relaxes every population and stays bounded.
 //!   Several solids s may cover one node; their fractions add and are capped at 1 (ε = min(Σ ε_s, 1)), and the
 //!   total weight B(ε) is shared in proportion to ε_s.
 //!   The momentum each solid receives (eq. 4.7, in lattice units: impulse per step = force) is
@@ -25,6 +32,16 @@ pub enum Weighting {
     NobleTorczynski,
     /// B = ε.
     SolidFraction,
+}
+
+/// Which solid collision operator Ω^S the partially-saturated collision uses.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum SolidOperator {
+    /// Ω₁, Noble & Torczynski's non-equilibrium bounce-back (dissertation eq. 4.6).
+    #[default]
+    NonEquilibriumBounceBack,
+    /// Ω₂, the superposition operator of Holdych (2003) (Owen et al. 2011, eq. 29).
+    Superposition,
 }
 
 /// The PSM weight B for a (capped) solid fraction `eps` ∈ [0, 1] and relaxation time `tau`.
@@ -142,6 +159,8 @@ pub struct PsmParams<T> {
     pub tau: T,
     /// Weighting function B.
     pub weighting: Weighting,
+    /// Solid collision operator Ω^S.
+    pub solid: SolidOperator,
     /// Body-force density applied to the fluid (weighted by 1 − B at covered nodes).
     pub force: [T; 2],
 }
@@ -193,11 +212,22 @@ pub fn psm_collide<T: Real>(
         (rho, [j[0] * inv, j[1] * inv])
     };
     let feq = equilibrium(rho, u);
-    // Non-equilibrium bounce-back common to every share: f_ī − f_ī^eq(ρ, u) − f_i.
+    // The part of Ω^S common to every share (each share adds f_i^eq(ρ, u_s)):
+    // Ω₁: f_ī − f_ī^eq(ρ, u) − f_i;  Ω₂: (1 − ω)(f_i − f_i^eq(ρ, u)) − f_i.
     let mut common = [T::zero(); Q];
-    for i in 0..Q {
-        let o = OPPOSITE[i];
-        common[i] = (f[o] - feq[o]) - f[i];
+    match params.solid {
+        SolidOperator::NonEquilibriumBounceBack => {
+            for i in 0..Q {
+                let o = OPPOSITE[i];
+                common[i] = (f[o] - feq[o]) - f[i];
+            }
+        }
+        SolidOperator::Superposition => {
+            let keep = T::one() - omega;
+            for i in 0..Q {
+                common[i] = keep * (f[i] - feq[i]) - f[i];
+            }
+        }
     }
     let one_minus_b = T::one() - b_total;
     let mut post = [T::zero(); Q];

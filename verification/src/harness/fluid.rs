@@ -8,7 +8,7 @@
 //! Kani the same body is a proof over all values in the same ranges.
 use crate::{Chooser, INTERESTING_F64};
 use lbdem_kernels::fluid::boundary::{Boundaries, SideCondition};
-use lbdem_kernels::fluid::collide::{PsmParams, SolidShare, Weighting};
+use lbdem_kernels::fluid::collide::{PsmParams, SolidOperator, SolidShare, Weighting};
 use lbdem_kernels::fluid::d2q9::equilibrium;
 use lbdem_kernels::fluid::d2q9::{OPPOSITE, Q, VELOCITIES};
 use lbdem_kernels::fluid::lattice::{LatticeShape, Neighbour, ShapeError, Side};
@@ -339,6 +339,7 @@ pub fn fix_passes_in_bounds(c: &mut dyn Chooser, max: usize) {
         tau: 0.8,
         weighting: Weighting::NobleTorczynski,
         force: [1e-4, 0.0],
+        solid: SolidOperator::NonEquilibriumBounceBack,
     };
     let mut dst = vec![f64::NAN; shape.buffer_len()];
     for (y0, y1) in [(0, ym), (ym, ny)] {
