@@ -52,7 +52,10 @@ pub fn for_all(mut body: impl FnMut(&mut dyn Chooser)) -> u64 {
             v
         }
     }
-    let mut odo = Odometer { digits: Vec::new(), pos: 0 };
+    let mut odo = Odometer {
+        digits: Vec::new(),
+        pos: 0,
+    };
     let mut runs = 0u64;
     loop {
         odo.pos = 0;
