@@ -125,6 +125,17 @@ impl<T: Real> BodyState<T> {
         }
     }
 
+    /// The state of a particle advanced by the central-difference scheme, with the velocity estimated at the
+    /// force time t: v(t − Δt/2) + a(t − Δt) Δt/2 (second order; the particle stores a(t − Δt)).
+    pub fn synchronous(p: &Particle<T>, dt: T) -> Self {
+        let half = T::lit(0.5) * dt;
+        BodyState {
+            position: p.position,
+            velocity: add(p.velocity, scale(p.acceleration, half)),
+            angular_velocity: p.angular_velocity + p.angular_acceleration * half,
+        }
+    }
+
     /// A fixed body (a wall) with reference point `position`.
     pub fn fixed(position: [T; 2]) -> Self {
         BodyState {

@@ -81,10 +81,15 @@ pub struct Particle<T> {
     pub angular_velocity: T,
     /// Mass (> 0).
     pub mass: T,
-    /// Moment of inertia about the centre (> 0).
+    /// Moment of inertia about the centre (> 0; +∞ locks the rotation).
     pub moment_of_inertia: T,
     /// Shape in the body frame.
     pub shape: Shape<T>,
+    /// The translational acceleration applied by the last integration step (zero initially); used to
+    /// estimate the velocity at the force time for velocity-dependent forces.
+    pub acceleration: [T; 2],
+    /// The angular acceleration applied by the last integration step.
+    pub angular_acceleration: T,
 }
 
 impl<T: Real> Particle<T> {
@@ -99,6 +104,8 @@ impl<T: Real> Particle<T> {
             mass,
             moment_of_inertia: mass * shape.inertia_per_mass(),
             shape,
+            acceleration: [T::zero(); 2],
+            angular_acceleration: T::zero(),
         }
     }
 

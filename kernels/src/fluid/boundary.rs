@@ -48,7 +48,10 @@ impl<T: Real> SideCondition<T> {
     /// Whether this side is a Zou–He side.
     #[inline(always)]
     pub fn is_zou_he(&self) -> bool {
-        matches!(self, SideCondition::Pressure { .. } | SideCondition::Velocity { .. })
+        matches!(
+            self,
+            SideCondition::Pressure { .. } | SideCondition::Velocity { .. }
+        )
     }
 }
 
@@ -112,16 +115,26 @@ impl<T: Real> Boundaries<T> {
         let pw = matches!(self.west, SideCondition::Periodic);
         let pe = matches!(self.east, SideCondition::Periodic);
         if pw != pe {
-            return Err(BoundaryError::UnpairedPeriodic(if pw { Side::East } else { Side::West }));
+            return Err(BoundaryError::UnpairedPeriodic(if pw {
+                Side::East
+            } else {
+                Side::West
+            }));
         }
         let ps = matches!(self.south, SideCondition::Periodic);
         let pn = matches!(self.north, SideCondition::Periodic);
         if ps != pn {
-            return Err(BoundaryError::UnpairedPeriodic(if ps { Side::North } else { Side::South }));
+            return Err(BoundaryError::UnpairedPeriodic(if ps {
+                Side::North
+            } else {
+                Side::South
+            }));
         }
         for side in [Side::West, Side::East, Side::South, Side::North] {
             match self.side(side) {
-                SideCondition::Pressure { density } if !(density.is_finite() && density > T::zero()) => {
+                SideCondition::Pressure { density }
+                    if !(density.is_finite() && density > T::zero()) =>
+                {
                     return Err(BoundaryError::BadDensity(side));
                 }
                 SideCondition::Velocity { velocity } => {

@@ -46,7 +46,13 @@ pub fn macroscopic<T: Real>(f: &[T; Q], force: [T; 2]) -> (T, [T; 2]) {
     let j = momentum(f);
     let half = T::lit(0.5);
     let inv = T::one() / rho;
-    (rho, [(j[0] + half * force[0]) * inv, (j[1] + half * force[1]) * inv])
+    (
+        rho,
+        [
+            (j[0] + half * force[0]) * inv,
+            (j[1] + half * force[1]) * inv,
+        ],
+    )
 }
 
 /// Guo source term S_i (without the (1 − ω/2) prefactor applied twice: this returns the full S_i).
@@ -99,7 +105,9 @@ pub fn bgk_collide_slices<T: Real>(planes: [&mut [T]; Q], omega: T, force: [T; 2
     let (p5, p6, p7, p8) = (&mut p5[..n], &mut p6[..n], &mut p7[..n], &mut p8[..n]);
     let forced = force[0] != T::zero() || force[1] != T::zero();
     for k in 0..n {
-        let mut f = [p0[k], p1[k], p2[k], p3[k], p4[k], p5[k], p6[k], p7[k], p8[k]];
+        let mut f = [
+            p0[k], p1[k], p2[k], p3[k], p4[k], p5[k], p6[k], p7[k], p8[k],
+        ];
         if forced {
             bgk_collide_forced(&mut f, omega, force);
         } else {
@@ -170,7 +178,11 @@ pub fn psm_collide<T: Real>(
         }
         return T::zero();
     }
-    let eps = if eps_sum > T::one() { T::one() } else { eps_sum };
+    let eps = if eps_sum > T::one() {
+        T::one()
+    } else {
+        eps_sum
+    };
     let b_total = weighting(params.weighting, eps, params.tau);
     let (rho, u) = if forced {
         macroscopic(f, params.force)

@@ -159,16 +159,24 @@ fn close_edges<T: Real>(
         (Some(sx), Some(sy)) => {
             let (cx, cy) = (bc.side(sx), bc.side(sy));
             let rho = match (cx, cy) {
-                (SideCondition::Pressure { density: a }, SideCondition::Pressure { density: b }) => {
-                    T::lit(0.5) * (a + b)
-                }
-                (SideCondition::Pressure { density }, _) | (_, SideCondition::Pressure { density }) => {
-                    density
-                }
+                (
+                    SideCondition::Pressure { density: a },
+                    SideCondition::Pressure { density: b },
+                ) => T::lit(0.5) * (a + b),
+                (SideCondition::Pressure { density }, _)
+                | (_, SideCondition::Pressure { density }) => density,
                 _ => {
                     // Two velocity sides: density of the diagonal interior neighbour (post-collision sum).
-                    let ix = if sx == Side::West { x + 1 } else { x.saturating_sub(1) };
-                    let iy = if sy == Side::South { y + 1 } else { y.saturating_sub(1) };
+                    let ix = if sx == Side::West {
+                        x + 1
+                    } else {
+                        x.saturating_sub(1)
+                    };
+                    let iy = if sy == Side::South {
+                        y + 1
+                    } else {
+                        y.saturating_sub(1)
+                    };
                     let (ix, iy) = (ix.min(shape.nx - 1), iy.min(shape.ny - 1));
                     let j = shape.index(ix, iy);
                     if flags[j] == SOLID {
@@ -179,9 +187,8 @@ fn close_edges<T: Real>(
                 }
             };
             let u = match (cx, cy) {
-                (SideCondition::Velocity { velocity }, _) | (_, SideCondition::Velocity { velocity }) => {
-                    velocity
-                }
+                (SideCondition::Velocity { velocity }, _)
+                | (_, SideCondition::Velocity { velocity }) => velocity,
                 _ => [T::zero(); 2],
             };
             zou_he_corner(f, sx, sy, rho, u);
@@ -306,7 +313,9 @@ pub fn bulk_rows<T: Real, C: Fn(&mut [T; Q])>(
         let d7 = &mut d7[row + 1..row + 1 + n];
         let d8 = &mut d8[row + 1..row + 1 + n];
         for k in 0..n {
-            let mut f = [s0[k], s1[k], s2[k], s3[k], s4[k], s5[k], s6[k], s7[k], s8[k]];
+            let mut f = [
+                s0[k], s1[k], s2[k], s3[k], s4[k], s5[k], s6[k], s7[k], s8[k],
+            ];
             collide(&mut f);
             d0[k] = f[0];
             d1[k] = f[1];
@@ -457,13 +466,20 @@ pub fn step_band<T: Real>(
             bgk_collide_forced(f, omega, force)
         });
     } else {
-        bulk_rows(shape, src, dst, y0, y1, |f: &mut [T; Q]| bgk_collide(f, omega));
+        bulk_rows(shape, src, dst, y0, y1, |f: &mut [T; Q]| {
+            bgk_collide(f, omega)
+        });
     }
     fix_special_nodes(domain, src, dst, y0, params, special);
 }
 
 /// The sub-slice of a sorted node list lying in rows y0..y1.
-pub fn nodes_in_rows<'a>(shape: &LatticeShape, nodes: &'a [u32], y0: usize, y1: usize) -> &'a [u32] {
+pub fn nodes_in_rows<'a>(
+    shape: &LatticeShape,
+    nodes: &'a [u32],
+    y0: usize,
+    y1: usize,
+) -> &'a [u32] {
     let (a, b) = ((y0 * shape.nx) as u32, (y1 * shape.nx) as u32);
     let lo = nodes.partition_point(|&n| n < a);
     let hi = nodes.partition_point(|&n| n < b);

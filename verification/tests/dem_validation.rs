@@ -1,0 +1,343 @@
+//! Kernel-level validation of the DEM against analytical results (REFERENCE §7): binary collisions (contact
+//! duration, restitution, energy), a disc settling on a wall under gravity, stick/slip on an incline, and the
+//! stability limit of the central-difference scheme. Parameters are the dissertation's table 6.1 (cgs: cm, g,
+//! s, dyne): k_n = 1e5 dyne/cm, k_s = 6e5 dyne/cm, μ = 0.5, radius 0.1 cm; areal density 2.6 g/cm².
+use lbdem_kernels::dem::contact::{closest_approach, particle_contact, wall_contact, Contact};
+use lbdem_kernels::dem::integrate::{
+    central_difference_step, critical_time_step, exceeds_critical_time_step, kinetic_energy,
+    particle_critical_time_step, single_dof_stability_limit,
+};
+use lbdem_kernels::dem::law::{
+    contact_duration, damping_ratio_from_restitution, effective_mass, linear_contact_force,
+    BodyState, ContactLaw,
+};
+use lbdem_kernels::dem::shape::{Particle, Wall};
+
+const KN: f64 = 1e5;
+const KS: f64 = 6e5;
+const MU: f64 = 0.5;
+const RADIUS: f64 = 0.1;
+const DENSITY: f64 = 2.6;
+const G: f64 = 981.0;
+
+struct Collision {
+    restitution: f64,
+    duration: f64,
+    energy_ratio: f64,
+}
+
+/// Head-on collision of two equal discs approaching at relative speed 2 v0; steps until they separate.
+fn head_on(law: &ContactLaw<f64>, dt: f64, synchronous: bool) -> Collision {
+    let v0 = 10.0;
+    let mut a = Particle::disc([-RADIUS - 1e-3, 0.0], RADIUS, DENSITY);
+    let mut b = Particle::disc([RADIUS + 1e-3, 0.0], RADIUS, DENSITY);
+    a.velocity = [v0, 0.0];
+    b.velocity = [-v0, 0.0];
+    let e0 = kinetic_energy(&a) + kinetic_energy(&b);
+    let state = |p: &Particle<f64>| {
+        if synchronous {
+            BodyState::synchronous(p, dt)
+        } else {
+            BodyState::of(p)
+        }
+    };
+    let mut shear = 0.0;
+    let mut contact_steps = 0usize;
+    let mut touched = false;
+    for _ in 0..1_000_000 {
+        let c = closest_approach(&a, &b);
+        if c.is_active() {
+            contact_steps += 1;
+            touched = true;
+        } else if touched {
+            break;
+        }
+        let f = linear_contact_force(law, &c, &state(&a), &state(&b), &mut shear, dt);
+        central_difference_step(&mut a, f.force_on_i, f.torque_on_i, [0.0; 2], 0.0, dt);
+        central_difference_step(&mut b, f.force_on_j, f.torque_on_j, [0.0; 2], 0.0, dt);
+    }
+    assert!(touched);
+    let after = b.velocity[0] - a.velocity[0];
+    Collision {
+        restitution: after / (2.0 * v0),
+        duration: contact_steps as f64 * dt,
+        energy_ratio: (kinetic_energy(&a) + kinetic_energy(&b)) / e0,
+    }
+}
+
+fn disc_mass() -> f64 {
+    DENSITY * std::f64::consts::PI * RADIUS * RADIUS
+}
+
+#[test]
+fn elastic_head_on_collision() {
+    let m_eff = effective_mass(disc_mass(), disc_mass());
+    let tc = contact_duration(KN, m_eff, 0.0);
+    assert!((tc - std::f64::consts::PI * (m_eff / KN).sqrt()).abs() < 1e-15);
+    let law = ContactLaw::elastic(KN, KS, MU);
+    let mut energy_errors = Vec::new();
+    for steps_per_contact in [50.0, 100.0, 200.0] {
+        let dt = tc / steps_per_contact;
+        let r = head_on(&law, dt, true);
+        // The duration is counted in whole steps: it can be off by one step at each end.
+        assert!(
+            (r.duration - tc).abs() <= 2.0 * dt,
+            "t_c {} vs {}",
+            r.duration,
+            tc
+        );
+        // Elastic: e = 1 and the kinetic energy returns; the leapfrog error is O(dt²) per collision.
+        let e_err = (r.restitution - 1.0).abs();
+        let w_err = (r.energy_ratio - 1.0).abs();
+        assert!(
+            e_err < 2.0 / (steps_per_contact * steps_per_contact),
+            "e = {}",
+            r.restitution
+        );
+        assert!(
+            w_err < 4.0 / (steps_per_contact * steps_per_contact),
+            "energy ratio {}",
+            r.energy_ratio
+        );
+        energy_errors.push(w_err);
+    }
+    eprintln!("elastic collision energy errors at t_c/50, /100, /200: {energy_errors:?}");
+}
+
+#[test]
+fn restitution_is_recovered_with_the_dashpot() {
+    let m_eff = effective_mass(disc_mass(), disc_mass());
+    for e in [0.3, 0.5, 0.7, 0.9] {
+        let zeta = damping_ratio_from_restitution(e);
+        let tc = contact_duration(KN, m_eff, zeta);
+        let dt = tc / 50.0;
+        // Without the no-tension clip the dashpot acts over the whole contact, as the formula assumes.
+        let law = ContactLaw {
+            no_tension: false,
+            ..ContactLaw::elastic(KN, KS, MU).with_restitution(e, m_eff)
+        };
+        let r = head_on(&law, dt, true);
+        let rel = (r.restitution - e).abs() / e;
+        let lagged = head_on(&law, dt, false);
+        let rel_lagged = (lagged.restitution - e).abs() / e;
+        let fine = head_on(&law, dt / 4.0, true);
+        let rel_fine = (fine.restitution - e).abs() / e;
+        eprintln!(
+            "e = {e}: measured {:.5} (rel. error {rel:.2e}; t_c/200: {rel_fine:.2e}; lagged velocity: {rel_lagged:.2e}), duration/t_c = {:.4}",
+            r.restitution,
+            r.duration / tc
+        );
+        // REFERENCE §7.1: within 1 % at dt ≤ t_c/50, with the dashpot fed the synchronous velocity estimate.
+        assert!(rel < 0.01, "e = {e}: measured {}", r.restitution);
+        // and it converges at second order: a quarter of the step divides the error by ≈ 16 (measured 15–17).
+        assert!(
+            rel_fine < rel / 8.0,
+            "e = {e}: {rel_fine} at t_c/200 vs {rel} at t_c/50"
+        );
+        assert!((r.duration - tc).abs() <= 2.0 * dt);
+        // With the clip the dashpot cannot pull at the end of the contact: less energy is lost.
+        let clipped = head_on(
+            &ContactLaw {
+                no_tension: true,
+                ..law
+            },
+            dt,
+            true,
+        );
+        assert!(clipped.restitution > r.restitution && clipped.restitution < 1.0);
+    }
+}
+
+fn settle_on_wall(
+    mut p: Particle<f64>,
+    wall: &Wall<f64>,
+    law: &ContactLaw<f64>,
+    gravity: [f64; 2],
+    alpha: f64,
+    dt: f64,
+    steps: usize,
+) -> (Particle<f64>, Contact<f64>, f64) {
+    let mut shear = 0.0;
+    let mut last = None;
+    for _ in 0..steps {
+        let (f, t) = match wall_contact(&p, wall) {
+            Some(c) => {
+                let fc = linear_contact_force(
+                    law,
+                    &c,
+                    &BodyState::of(&p),
+                    &BodyState::fixed(c.point_j),
+                    &mut shear,
+                    dt,
+                );
+                last = Some(c);
+                (fc.force_on_i, fc.torque_on_i)
+            }
+            None => {
+                shear = 0.0;
+                ([0.0; 2], 0.0)
+            }
+        };
+        central_difference_step(&mut p, f, t, gravity, alpha, dt);
+    }
+    (p, last.expect("the particle reached the wall"), shear)
+}
+
+#[test]
+fn disc_settles_to_the_static_overlap() {
+    let p = Particle::disc([0.0, RADIUS + 0.01], RADIUS, DENSITY);
+    let wall = Wall {
+        point: [0.0, 0.0],
+        normal: [0.0, 1.0],
+    };
+    let m = p.mass;
+    let law = ContactLaw::elastic(KN, KS, MU).with_restitution(0.5, m);
+    let tc = contact_duration(KN, m, damping_ratio_from_restitution(0.5));
+    let dt = tc / 50.0;
+    // 20 000 steps ≈ 400 contact durations: the dashpot (ζ = 0.22) and local damping (α = 0.7) decay the
+    // oscillation by far more than 1e-12 in that time, so what remains is the static balance k_n δ = m g.
+    let (p, c, _) = settle_on_wall(p, &wall, &law, [0.0, -G], 0.7, dt, 20_000);
+    let expected = m * G / KN;
+    assert!(
+        (c.overlap - expected).abs() < 1e-9 * expected,
+        "overlap {} vs mg/kn {}",
+        c.overlap,
+        expected
+    );
+    assert!(p.velocity[1].abs() < 1e-9);
+}
+
+#[test]
+fn ellipse_comes_to_rest_flat_on_a_wall() {
+    // An ellipse of aspect ratio 0.5 (ch. 6.6) released tilted by 0.6 rad rocks down to lie on its long side.
+    let a = 0.11;
+    let b = 0.055;
+    let p = Particle::ellipse([0.0, a + 0.002], 0.6, a, b, DENSITY);
+    let wall = Wall {
+        point: [0.0, 0.0],
+        normal: [0.0, 1.0],
+    };
+    let m = p.mass;
+    let law = ContactLaw::elastic(KN, KS, MU).with_restitution(0.5, m);
+    let dt = contact_duration(KN, m, 0.0) / 50.0;
+    let (p, c, _) = settle_on_wall(p, &wall, &law, [0.0, -G], 0.7, dt, 200_000);
+    let tilt = p.angle.rem_euclid(std::f64::consts::PI);
+    let tilt = tilt.min(std::f64::consts::PI - tilt);
+    assert!(tilt < 1e-4, "final angle {}", p.angle);
+    let expected = m * G / KN;
+    assert!(
+        (c.overlap - expected).abs() < 1e-4 * expected,
+        "overlap {} vs {}",
+        c.overlap,
+        expected
+    );
+    assert!((p.position[1] - (b - expected)).abs() < 1e-6);
+}
+
+/// A block on an incline: a disc whose rotation is locked (infinite moment of inertia), on a wall, under gravity
+/// tilted by θ; it starts in static equilibrium (overlap m g cos θ/k_n, shear history m g sin θ). Returns the
+/// displacement along the slope after `time` and the acceleration measured over the second half.
+fn incline(theta: f64, time: f64) -> (f64, f64) {
+    let mut p = Particle::disc([0.0, RADIUS], RADIUS, DENSITY);
+    p.moment_of_inertia = f64::INFINITY;
+    let m = p.mass;
+    let gravity = [G * theta.sin(), -G * theta.cos()];
+    p.position[1] = RADIUS - m * G * theta.cos() / KN;
+    let wall = Wall {
+        point: [0.0, 0.0],
+        normal: [0.0, 1.0],
+    };
+    let law = ContactLaw::elastic(KN, KS, MU).with_restitution(0.5, m);
+    let dt = contact_duration(KN, m, 0.0) / 50.0;
+    let steps = (time / dt) as usize;
+    // The contact normal (disc → wall) is −y, so the tangent t is +x. The history is the shear force on the
+    // wall (body j) along t: friction holds the disc back with −m g sin θ, so the wall receives +m g sin θ.
+    let mut shear = m * G * theta.sin();
+    let x0 = p.position[0];
+    let mut v_half = 0.0;
+    for k in 0..steps {
+        let c = wall_contact(&p, &wall).expect("stays in contact");
+        let f = linear_contact_force(
+            &law,
+            &c,
+            &BodyState::of(&p),
+            &BodyState::fixed(c.point_j),
+            &mut shear,
+            dt,
+        );
+        central_difference_step(&mut p, f.force_on_i, f.torque_on_i, gravity, 0.0, dt);
+        if k == steps / 2 {
+            v_half = p.velocity[0];
+        }
+        assert_eq!(p.angular_velocity, 0.0);
+    }
+    let t_half = (steps - steps / 2 - 1) as f64 * dt;
+    (p.position[0] - x0, (p.velocity[0] - v_half) / t_half)
+}
+
+#[test]
+fn block_on_incline_sticks_below_and_slides_above_the_friction_angle() {
+    for tan in [0.4, 0.49, 0.51, 0.6] {
+        let theta = f64::atan(tan);
+        let (dx, acc) = incline(theta, 0.05);
+        if tan < MU {
+            // Stuck: the contact point does not move (beyond rounding of the static balance).
+            assert!(dx.abs() < 1e-9, "tan θ = {tan}: moved {dx}");
+        } else {
+            // Sliding: a = g (sin θ − μ cos θ) exactly once the Coulomb cap holds, since F_n = m g cos θ.
+            let expected = G * (theta.sin() - MU * theta.cos());
+            assert!(dx > 0.0);
+            assert!(
+                (acc - expected).abs() < 0.01 * expected,
+                "tan θ = {tan}: a = {acc} vs {expected}"
+            );
+        }
+    }
+}
+
+#[test]
+fn central_difference_stability_limit() {
+    // One degree of freedom, m x'' = −k x: bounded below 2√(m/k), growing above it.
+    let (m, k) = (disc_mass(), KN);
+    let limit = single_dof_stability_limit(m, k);
+    let run = |dt: f64| {
+        let mut p = Particle::disc([1e-3, 0.0], RADIUS, DENSITY);
+        let mut peak: f64 = 0.0;
+        for _ in 0..4000 {
+            let f = [-k * p.position[0], 0.0];
+            central_difference_step(&mut p, f, 0.0, [0.0; 2], 0.0, dt);
+            peak = peak.max(p.position[0].abs());
+        }
+        peak
+    };
+    assert!(run(0.98 * limit) < 1e-1, "stable below the limit");
+    assert!(run(1.02 * limit) > 1e3, "unstable above the limit");
+    assert!(!exceeds_critical_time_step(0.98 * limit, limit, 1.0));
+    assert!(exceeds_critical_time_step(1.02 * limit, limit, 1.0));
+    assert!(exceeds_critical_time_step(0.9 * limit, limit, 0.8));
+    assert!(exceeds_critical_time_step(f64::NAN, limit, 1.0));
+    // PFC estimate: √(m/Σk) per particle, the minimum over particles, rotation included.
+    let a = Particle::disc([0.0, 0.0], 0.1, DENSITY);
+    let b = Particle::disc([0.0, 0.0], 0.07, DENSITY);
+    let kt = [2.0 * KN, 3.0 * KN];
+    let kr = [2.0 * KS * 0.01, 3.0 * KS * 0.0049];
+    let dt = critical_time_step(&[a, b], &kt, &kr);
+    let expect_b = (b.mass / kt[1])
+        .sqrt()
+        .min((b.moment_of_inertia / kr[1]).sqrt());
+    assert!((dt - expect_b).abs() < 1e-18);
+    assert_eq!(
+        particle_critical_time_step(1.0, 0.0, 1.0, 0.0),
+        f64::INFINITY
+    );
+}
+
+#[test]
+fn resting_pair_contacts_are_found_and_dropped() {
+    // A lightweight check that particle_contact and the law agree on the life of a contact.
+    let a = Particle::disc([0.0, 0.0], RADIUS, DENSITY);
+    let mut b = Particle::disc([2.0 * RADIUS - 1e-4, 0.0], RADIUS, DENSITY);
+    assert!(particle_contact(&a, &b).is_some());
+    b.position[0] += 2e-4;
+    assert!(particle_contact(&a, &b).is_none());
+}
