@@ -33,6 +33,42 @@ use crate::Real;
 
 /// Number of equally spaced normal angles sampled before the Newton refinement.
 pub const ELLIPSE_SAMPLES: usize = 32;
+/// (cos θ_k, sin θ_k) for θ_k = 2πk/32, the sample directions (correctly rounded f64).
+#[allow(clippy::approx_constant)]
+const SAMPLE_DIRECTIONS: [[f64; 2]; ELLIPSE_SAMPLES] = [
+    [1.0, 0.0],
+    [0.9807852804032304, 0.19509032201612825],
+    [0.9238795325112867, 0.3826834323650898],
+    [0.8314696123025452, 0.5555702330196022],
+    [0.7071067811865476, 0.7071067811865475],
+    [0.5555702330196023, 0.8314696123025452],
+    [0.38268343236508984, 0.9238795325112867],
+    [0.19509032201612833, 0.9807852804032304],
+    [0.0, 1.0],
+    [-0.1950903220161282, 0.9807852804032304],
+    [-0.3826834323650897, 0.9238795325112867],
+    [-0.555570233019602, 0.8314696123025455],
+    [-0.7071067811865475, 0.7071067811865476],
+    [-0.8314696123025453, 0.5555702330196022],
+    [-0.9238795325112867, 0.3826834323650899],
+    [-0.9807852804032304, 0.1950903220161286],
+    [-1.0, 0.0],
+    [-0.9807852804032304, -0.19509032201612836],
+    [-0.9238795325112868, -0.38268343236508967],
+    [-0.8314696123025455, -0.555570233019602],
+    [-0.7071067811865477, -0.7071067811865475],
+    [-0.5555702330196022, -0.8314696123025452],
+    [-0.38268343236509034, -0.9238795325112865],
+    [-0.19509032201612866, -0.9807852804032303],
+    [0.0, -1.0],
+    [0.1950903220161283, -0.9807852804032304],
+    [0.38268343236509, -0.9238795325112866],
+    [0.5555702330196018, -0.8314696123025455],
+    [0.7071067811865474, -0.7071067811865477],
+    [0.8314696123025452, -0.5555702330196022],
+    [0.9238795325112865, -0.3826834323650904],
+    [0.9807852804032303, -0.19509032201612872],
+];
 const MAX_NEWTON: usize = 60;
 const MAX_GOLDEN: usize = 80;
 
@@ -123,7 +159,12 @@ pub fn ellipse_wall<T: Real>(ellipse: &Placed<T>, wall: &Wall<T>) -> Contact<T> 
 /// s, s', s'' at angle θ (see the module documentation).
 #[inline(always)]
 fn gap<T: Real>(a: &Placed<T>, b: &Placed<T>, d: [T; 2], theta: T) -> (T, T, T) {
-    let n = unit(theta);
+    gap_along(a, b, d, unit(theta))
+}
+
+/// s, s', s'' along the unit direction n.
+#[inline(always)]
+fn gap_along<T: Real>(a: &Placed<T>, b: &Placed<T>, d: [T; 2], n: [T; 2]) -> (T, T, T) {
     let (ha, dha, ra) = a.support_derivatives(n);
     let (hb, dhb, rb) = b.support_derivatives(n);
     let s = dot(n, d) - ha - hb;
@@ -206,8 +247,9 @@ pub fn ellipse_ellipse<T: Real>(a: &Placed<T>, b: &Placed<T>) -> Contact<T> {
     let step = T::lit(core::f64::consts::TAU / ELLIPSE_SAMPLES as f64);
     let mut s = [T::zero(); ELLIPSE_SAMPLES];
     let mut best_k = 0;
-    for (k, sk) in s.iter_mut().enumerate() {
-        *sk = gap(a, b, d, step * T::lit(k as f64)).0;
+    for (sk, n) in s.iter_mut().zip(SAMPLE_DIRECTIONS) {
+        let n = [T::lit(n[0]), T::lit(n[1])];
+        *sk = dot(n, d) - a.support_value(n) - b.support_value(n);
     }
     for k in 1..ELLIPSE_SAMPLES {
         if s[k] > s[best_k] {

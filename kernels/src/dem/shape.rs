@@ -11,7 +11,8 @@
 //! * A wall is a half-plane {x : (x − p)·m ≤ 0} with a unit outward normal m pointing into the region where the
 //!   particles live; it is fixed, with infinite mass.
 //!
-//! Units: any consistent system (lengths, masses, times chosen by the caller).
+//! Units: any consistent system (lengths, masses, times chosen by the caller). Support values use a plain
+//! √(x² + y²) (not `hypot`, which is several times slower): lengths must stay below ~1e150 (f64) / 1e18 (f32).
 use super::vector::{add, dot, scale};
 use crate::Real;
 
@@ -176,14 +177,14 @@ impl<T: Real> Placed<T> {
     #[inline(always)]
     pub fn support_value(&self, n: [T; 2]) -> T {
         let (p, q) = self.body(n);
-        (self.a * p).hypot(self.b * q)
+        ((self.a * p) * (self.a * p) + (self.b * q) * (self.b * q)).sqrt()
     }
 
     /// Support value h, its derivative dh/dθ and the radius of curvature a²b²/h³ for n = (cos θ, sin θ).
     #[inline(always)]
     pub fn support_derivatives(&self, n: [T; 2]) -> (T, T, T) {
         let (p, q) = self.body(n);
-        let h = (self.a * p).hypot(self.b * q);
+        let h = ((self.a * p) * (self.a * p) + (self.b * q) * (self.b * q)).sqrt();
         let (a2, b2) = (self.a * self.a, self.b * self.b);
         // h > 0 for positive semi-axes and a unit n (h ≥ min(a, b)).
         let dh = (b2 - a2) * p * q / h;
@@ -196,7 +197,7 @@ impl<T: Real> Placed<T> {
     pub fn support_point(&self, n: [T; 2]) -> [T; 2] {
         let (p, q) = self.body(n);
         let (a2, b2) = (self.a * self.a, self.b * self.b);
-        let h = (self.a * p).hypot(self.b * q);
+        let h = ((self.a * p) * (self.a * p) + (self.b * q) * (self.b * q)).sqrt();
         let (x, y) = (a2 * p / h, b2 * q / h);
         // back to world axes: x u + y v
         let off = [self.cos * x - self.sin * y, self.sin * x + self.cos * y];
