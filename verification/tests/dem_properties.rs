@@ -17,9 +17,10 @@ use lbdem_reference::dem as oracle;
 use proptest::prelude::*;
 
 /// Oracle resolution: 2048 boundary points and 2048 directions. With a = 1 and b ≥ 0.4 the oracle's own
-/// error is ≤ a(2π/n)²/8 + ½(2a²/b + |δ|)(π/m)² ≈ 1.2e-6 + 1.3e-5 (see `lbdem_reference::dem`), and it only
-/// errs on the side of a larger overlap. The kernel converges to rounding, so 2e-5 is the oracle's bound plus
-/// headroom, 2e-5 of the semi-major axis.
+/// error is ≤ a(2π/n)²/8 + ½(2a²/b + |δ|)(π/m)² ≈ 1.2e-6 + 1.3e-5 (see `lbdem_reference::dem`; the inscribed
+/// polygon underestimates the overlap, the direction search overestimates it). The kernel converges to
+/// rounding, so 2e-5 of the semi-major axis is the oracle's bound plus headroom. Measured: the largest
+/// difference is 2.5e-6 at n = m = 2048 and 1.1e-7 at 8192 (it falls as 1/n², so it is the oracle's error).
 const ORACLE_SAMPLES: usize = 2048;
 const ORACLE_TOLERANCE: f64 = 2e-5;
 
