@@ -9,7 +9,7 @@ use lbdem_kernels::dem::contact::{
     closest_approach, disc_disc, ellipse_disc, ellipse_ellipse, ellipse_wall, particle_contact,
     Contact,
 };
-use lbdem_kernels::dem::grid::{build_cell_grid, candidate_pairs, CellGrid};
+use lbdem_kernels::dem::grid::{build_cell_grid, candidate_pairs, carry_contact_history, CellGrid};
 use lbdem_kernels::dem::law::{linear_contact_force, BodyState, ContactLaw};
 use lbdem_kernels::dem::shape::{Particle, Placed, Wall};
 use lbdem_kernels::dem::vector::{cross, sub};
@@ -281,11 +281,11 @@ proptest! {
         let mut pairs = vec![[0, 0]; 4000];
         let count = candidate_pairs(&grid, &positions, &radii, margin, &start, &order, &mut pairs).unwrap();
         prop_assert_eq!(count.found, count.stored);
-        let mut got = pairs[..count.stored].to_vec();
+        let got = pairs[..count.stored].to_vec();
         let mut again = vec![[0, 0]; 4000];
         let count2 = candidate_pairs(&grid, &positions, &radii, margin, &start, &order, &mut again).unwrap();
         prop_assert_eq!(&again[..count2.stored], &got[..]);
-        got.sort();
+        prop_assert!(got.windows(2).all(|w| w[0] < w[1]), "sorted, no duplicates");
         let mut expected = Vec::new();
         for i in 0..positions.len() {
             for j in i + 1..positions.len() {
@@ -302,6 +302,34 @@ proptest! {
         let c3 = candidate_pairs(&grid, &positions, &radii, margin, &start, &order, &mut small).unwrap();
         prop_assert_eq!(c3.found, count.found);
         prop_assert_eq!(c3.stored, count.found.min(1));
+    }
+}
+
+proptest! {
+    #![proptest_config(config(64))]
+
+    /// Contact history survives exactly for the pairs present in both steps; new pairs start at zero.
+    #[test]
+    fn contact_history_is_carried_for_persisting_pairs(
+        before in prop::collection::btree_set((0usize..8, 0usize..8), 0..20),
+        after in prop::collection::btree_set((0usize..8, 0usize..8), 0..20),
+    ) {
+        let prev: Vec<[usize; 2]> = before.iter().map(|&(a, b)| [a, b]).collect();
+        let next: Vec<[usize; 2]> = after.iter().map(|&(a, b)| [a, b]).collect();
+        let prev_values: Vec<f64> = (0..prev.len()).map(|k| k as f64 + 1.5).collect();
+        let mut values = vec![f64::NAN; next.len()];
+        let carried = carry_contact_history(&prev, &prev_values, &next, &mut values).unwrap();
+        let mut expected_carried = 0;
+        for (pair, v) in next.iter().zip(&values) {
+            match prev.iter().position(|p| p == pair) {
+                Some(k) => {
+                    prop_assert_eq!(*v, prev_values[k]);
+                    expected_carried += 1;
+                }
+                None => prop_assert_eq!(*v, 0.0),
+            }
+        }
+        prop_assert_eq!(carried, expected_carried);
     }
 }
 

@@ -8,8 +8,14 @@
 //!
 //! Build (O(N + cells)): `cell_start` (length cells + 1) receives the offsets, `cell_particles` (length N) the
 //! particle indices sorted by cell, ascending index within a cell (a stable counting sort). Pairs (i < j) are
-//! then listed in a deterministic order: by i, then the 3 × 3 neighbour cells in row-major order, then j
-//! ascending; a bounding-circle test |c_j − c_i| < R_i + R_j + margin filters them.
+//! then found by visiting, for each i, the 3 × 3 neighbour cells; a bounding-circle test
+//! |c_j − c_i| < R_i + R_j + margin filters them, and the stored pairs are returned sorted lexicographically
+//! (a deterministic order independent of the grid, and the order [`carry_contact_history`] needs).
+//!
+//! Contact history across steps: [`carry_contact_history`] merges last step's sorted pair list and its
+//! per-pair values (the shear force of [`linear_contact_force`](super::law::linear_contact_force)) into this
+//! step's list in O(N): a pair that persists keeps its value, a new pair starts from zero, and a pair that
+//! disappeared is dropped.
 //!
 //! The index arithmetic (`cell_index`, `neighbour_span`, the counting sort) is proved in bounds for all small
 //! grids by the bounded-exhaustive harness in `verification/src/harness/dem.rs`.
@@ -243,5 +249,34 @@ pub fn candidate_pairs<T: Real>(
             }
         }
     }
+    pairs[..stored].sort_unstable();
     Ok(PairCount { found, stored })
+}
+
+/// Copy per-pair values (e.g. the shear history) from `previous_pairs` to `pairs`, both sorted ascending
+/// without duplicates (as [`candidate_pairs`] returns them); pairs not present before get zero. Returns the
+/// number of values carried over, or `BufferLength` if a value slice is shorter than its pair list.
+pub fn carry_contact_history<T: Real>(
+    previous_pairs: &[[usize; 2]],
+    previous_values: &[T],
+    pairs: &[[usize; 2]],
+    values: &mut [T],
+) -> Result<usize, GridError> {
+    if previous_values.len() < previous_pairs.len() || values.len() < pairs.len() {
+        return Err(GridError::BufferLength);
+    }
+    let mut k = 0;
+    let mut carried = 0;
+    for (pair, value) in pairs.iter().zip(values.iter_mut()) {
+        while k < previous_pairs.len() && previous_pairs[k] < *pair {
+            k += 1;
+        }
+        if k < previous_pairs.len() && previous_pairs[k] == *pair {
+            *value = previous_values[k];
+            carried += 1;
+        } else {
+            *value = T::zero();
+        }
+    }
+    Ok(carried)
 }
