@@ -341,3 +341,141 @@ fn resting_pair_contacts_are_found_and_dropped() {
     b.position[0] += 2e-4;
     assert!(particle_contact(&a, &b).is_none());
 }
+
+/// Everything together: 24 discs and ellipses (aspect ratio 0.5) poured into a box under gravity, with the
+/// cell-grid broad phase, carried shear histories, the dashpot (e = 0.5) and local damping (α = 0.7). At rest
+/// the walls must carry the whole weight: Σ F_y(walls) = Σ m g, Σ F_x(walls) = 0.
+#[test]
+fn poured_packing_comes_to_static_equilibrium() {
+    use lbdem_kernels::dem::grid::{
+        build_cell_grid, candidate_pairs, carry_contact_history, CellGrid,
+    };
+    let width = 1.0;
+    let walls = [
+        Wall {
+            point: [0.0, 0.0],
+            normal: [0.0, 1.0],
+        },
+        Wall {
+            point: [0.0, 0.0],
+            normal: [1.0, 0.0],
+        },
+        Wall {
+            point: [width, 0.0],
+            normal: [-1.0, 0.0],
+        },
+    ];
+    let mut particles: Vec<Particle<f64>> = (0..24)
+        .map(|k| {
+            let (col, row) = (k % 4, k / 4);
+            let pos = [0.14 + 0.24 * col as f64, 0.15 + 0.25 * row as f64];
+            let size = 0.08 + 0.03 * ((k * 7 % 5) as f64 / 4.0);
+            if k % 2 == 0 {
+                Particle::disc(pos, size * 0.9, DENSITY)
+            } else {
+                Particle::ellipse(pos, 0.37 * k as f64, size, 0.5 * size, DENSITY)
+            }
+        })
+        .collect();
+    let n = particles.len();
+    let m_min = particles
+        .iter()
+        .map(|p| p.mass)
+        .fold(f64::INFINITY, f64::min);
+    let dt = 0.1 * single_dof_stability_limit(m_min, KS);
+    let grid = CellGrid::covering([0.0, 0.0], [width, 2.0], 2.0 * 0.11 + 0.01, 64).unwrap();
+    let mut start = vec![0; grid.cell_start_len()];
+    let mut order = vec![0; n];
+    let radii: Vec<f64> = particles
+        .iter()
+        .map(|p| p.shape.bounding_radius())
+        .collect();
+    let mut pairs = vec![[0usize; 2]; 8 * n];
+    let mut values = vec![0.0; 8 * n];
+    let mut prev_pairs: Vec<[usize; 2]> = Vec::new();
+    let mut prev_values: Vec<f64> = Vec::new();
+    let mut wall_shear = vec![0.0; 3 * n];
+    let mut wall_force = [0.0f64; 2];
+    for _ in 0..12_000 {
+        let positions: Vec<[f64; 2]> = particles.iter().map(|p| p.position).collect();
+        build_cell_grid(&grid, &positions, &mut start, &mut order).unwrap();
+        let count =
+            candidate_pairs(&grid, &positions, &radii, 0.01, &start, &order, &mut pairs).unwrap();
+        assert_eq!(count.found, count.stored);
+        let pairs = &pairs[..count.stored];
+        let values = &mut values[..count.stored];
+        carry_contact_history(&prev_pairs, &prev_values, pairs, values).unwrap();
+        let mut force = vec![[0.0f64; 2]; n];
+        let mut torque = vec![0.0f64; n];
+        for (&[i, j], shear) in pairs.iter().zip(values.iter_mut()) {
+            let c = closest_approach(&particles[i], &particles[j]);
+            let m_eff = effective_mass(particles[i].mass, particles[j].mass);
+            let law = ContactLaw::elastic(KN, KS, MU).with_restitution(0.5, m_eff);
+            let f = linear_contact_force(
+                &law,
+                &c,
+                &BodyState::synchronous(&particles[i], dt),
+                &BodyState::synchronous(&particles[j], dt),
+                shear,
+                dt,
+            );
+            for k in 0..2 {
+                force[i][k] += f.force_on_i[k];
+                force[j][k] += f.force_on_j[k];
+            }
+            torque[i] += f.torque_on_i;
+            torque[j] += f.torque_on_j;
+        }
+        wall_force = [0.0; 2];
+        for (i, p) in particles.iter().enumerate() {
+            for (w, wall) in walls.iter().enumerate() {
+                let shear = &mut wall_shear[3 * i + w];
+                let Some(c) = wall_contact(p, wall) else {
+                    *shear = 0.0;
+                    continue;
+                };
+                let law = ContactLaw::elastic(KN, KS, MU).with_restitution(0.5, p.mass);
+                let f = linear_contact_force(
+                    &law,
+                    &c,
+                    &BodyState::synchronous(p, dt),
+                    &BodyState::fixed(c.point_j),
+                    shear,
+                    dt,
+                );
+                for k in 0..2 {
+                    force[i][k] += f.force_on_i[k];
+                    wall_force[k] += f.force_on_i[k];
+                }
+                torque[i] += f.torque_on_i;
+            }
+        }
+        for ((p, f), t) in particles.iter_mut().zip(&force).zip(&torque) {
+            central_difference_step(p, *f, *t, [0.0, -G], 0.7, dt);
+        }
+        prev_pairs.clear();
+        prev_pairs.extend_from_slice(pairs);
+        prev_values.clear();
+        prev_values.extend_from_slice(values);
+    }
+    let weight: f64 = particles.iter().map(|p| p.mass * G).sum();
+    let kinetic: f64 = particles.iter().map(kinetic_energy).sum();
+    for p in &particles {
+        assert!(p.position.iter().all(|x| x.is_finite()));
+        assert!(p.position[0] > 0.0 && p.position[0] < width && p.position[1] > 0.0);
+    }
+    // At rest the kinetic energy is negligible against the potential energy scale W·r (≈ 20 dyne·cm).
+    assert!(kinetic < 1e-9 * weight * 0.1, "kinetic energy {kinetic}");
+    // The walls carry the weight (sign: wall_force sums the forces on the particles).
+    assert!(
+        (wall_force[1] - weight).abs() < 1e-4 * weight,
+        "{} vs {}",
+        wall_force[1],
+        weight
+    );
+    assert!(
+        wall_force[0].abs() < 1e-4 * weight,
+        "net horizontal {}",
+        wall_force[0]
+    );
+}
