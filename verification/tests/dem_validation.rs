@@ -350,6 +350,7 @@ fn poured_packing_comes_to_static_equilibrium() {
     use lbdem_kernels::dem::grid::{
         build_cell_grid, candidate_pairs, carry_contact_history, CellGrid,
     };
+    use lbdem_kernels::dem::vector::add;
     let width = 1.0;
     let walls = [
         Wall {
@@ -419,10 +420,8 @@ fn poured_packing_comes_to_static_equilibrium() {
                 shear,
                 dt,
             );
-            for k in 0..2 {
-                force[i][k] += f.force_on_i[k];
-                force[j][k] += f.force_on_j[k];
-            }
+            force[i] = add(force[i], f.force_on_i);
+            force[j] = add(force[j], f.force_on_j);
             torque[i] += f.torque_on_i;
             torque[j] += f.torque_on_j;
         }
@@ -443,10 +442,8 @@ fn poured_packing_comes_to_static_equilibrium() {
                     shear,
                     dt,
                 );
-                for k in 0..2 {
-                    force[i][k] += f.force_on_i[k];
-                    wall_force[k] += f.force_on_i[k];
-                }
+                force[i] = add(force[i], f.force_on_i);
+                wall_force = add(wall_force, f.force_on_i);
                 torque[i] += f.torque_on_i;
             }
         }
