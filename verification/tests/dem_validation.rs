@@ -476,3 +476,149 @@ fn poured_packing_comes_to_static_equilibrium() {
         wall_force[0]
     );
 }
+
+/// Point bond of eq. 6.13 with the table 6.1 values (k_b = 1e5 dyne/cm, F_crit = 700 dyne) between two
+/// ellipses of aspect ratio 0.5 lying tip to tip. Pulled apart along the bond at speed v it carries
+/// F = k_b v t and breaks in tension at t* = F_crit/(k_b v); pulled sideways it breaks in shear at the same
+/// load (the bond has no separate shear strength).
+#[test]
+fn point_bond_breaks_at_the_dissertation_strength() {
+    use lbdem_kernels::dem::bond::{point_bond_force, BreakMode, PointBond};
+    let (kb, fcrit) = (1e5, 700.0);
+    for (direction, expected_mode) in [
+        ([1.0, 0.0], BreakMode::Tension),
+        ([0.0, 1.0], BreakMode::Shear),
+    ] {
+        let a = Particle::ellipse([0.0, 0.0], 0.0, 0.11, 0.055, DENSITY);
+        let mut b = Particle::ellipse([0.11 + 0.09 + 1e-3, 0.0], 0.0, 0.09, 0.045, DENSITY);
+        let mut bond = PointBond::between(&a, &b, kb, fcrit);
+        // The closest surface points are the two tips, 1e-3 apart.
+        assert!((bond.rest_gap[0] - 1e-3).abs() < 1e-12 && bond.rest_gap[1].abs() < 1e-12);
+        let (v, dt) = (1.0, 1e-7);
+        let mut t = 0.0;
+        let broke = loop {
+            let f = point_bond_force(&mut bond, &a, &b);
+            if let Some(record) = f.broke {
+                break record;
+            }
+            // Linear spring: |F| = k_b |Δx| = k_b v t, and it pulls b back.
+            let magnitude = f.force_on_j[0].hypot(f.force_on_j[1]);
+            assert!((magnitude - kb * v * t).abs() < 1e-6 * fcrit);
+            assert!(f.force_on_j[0] * direction[0] + f.force_on_j[1] * direction[1] <= 0.0);
+            t += dt;
+            b.position[0] += direction[0] * v * dt;
+            b.position[1] += direction[1] * v * dt;
+            assert!(t < 1.0);
+        };
+        let t_star = fcrit / (kb * v);
+        assert!(
+            (t - t_star).abs() <= 1.01 * dt,
+            "broke at {t}, expected {t_star}"
+        );
+        assert_eq!(broke.mode, expected_mode);
+        assert!(broke.load >= fcrit && broke.load < fcrit + kb * v * dt * 1.01);
+        assert!(broke.orientation.abs() < 1e-12);
+        // At the midpoint of the material points: a's tip (0.11, 0) and b's tip moved by v t* ≈ 0.007.
+        let moved = v * t;
+        let expected = [
+            0.5 * (0.11 + 0.111 + direction[0] * moved),
+            0.5 * direction[1] * moved,
+        ];
+        assert!(
+            (broke.position[0] - expected[0]).abs() < 1e-9
+                && (broke.position[1] - expected[1]).abs() < 1e-9
+        );
+        // Broken for good: even back at the rest position it carries nothing.
+        b.position = [0.11 + 0.09 + 1e-3, 0.0];
+        let f = point_bond_force(&mut bond, &a, &b);
+        assert!(f.broke.is_none() && f.force_on_j == [0.0, 0.0]);
+    }
+}
+
+/// Parallel bond between two discs (R = 0.1, λ̄ = 1 ⇒ R̄ = 0.1, A = 0.2, I = 2e-3/3): a relative rotation at
+/// rate ω builds M̄ = −k̄_n I ω t and breaks in tension when |M̄| R̄/I = k̄_n R̄ ω t reaches σ̄_c; a normal
+/// opening at speed v breaks it when k̄_n v t reaches σ̄_c; a shear offset when k̄_s v t reaches τ̄_c.
+#[test]
+fn parallel_bond_breaks_where_the_beam_formulas_say() {
+    use lbdem_kernels::dem::bond::{parallel_bond_force, BreakMode, ParallelBond};
+    let (kn, ks, sigma_c, tau_c): (f64, f64, f64, f64) = (1e8, 4e7, 2e5, 3e5);
+    let (r, dt): (f64, f64) = (0.1, 1e-6);
+    let fresh = ParallelBond::new(r, r, 1.0, kn, ks, sigma_c, tau_c);
+    assert!((fresh.inertia() - 2.0 * r * r * r / 3.0).abs() < 1e-18);
+    let i = BodyState::fixed([0.0, 0.0]);
+    let cases = [
+        // (velocity of j, angular velocity of j, mode, time to break)
+        (
+            [0.0, 0.0],
+            0.5,
+            BreakMode::Tension,
+            sigma_c / (kn * r * 0.5),
+        ),
+        ([1.0, 0.0], 0.0, BreakMode::Tension, sigma_c / (kn * 1.0)),
+        ([0.0, 1.0], 0.0, BreakMode::Shear, tau_c / (ks * 1.0)),
+    ];
+    for (velocity, omega, mode, t_star) in cases {
+        let mut bond = fresh;
+        let mut j = BodyState {
+            position: [2.0 * r, 0.0],
+            velocity,
+            angular_velocity: 0.0,
+        };
+        j.angular_velocity = omega;
+        let mut t = 0.0;
+        let record = loop {
+            let f = parallel_bond_force(&mut bond, &i, r, &j, r, dt);
+            t += dt;
+            if let Some(rec) = f.broke {
+                break rec;
+            }
+            assert!(t < 1.0);
+            // Keep the geometry fixed: the increments come from the velocities only (small-strain test).
+        };
+        assert_eq!(record.mode, mode);
+        assert!(
+            (t - t_star).abs() <= 1.01 * dt,
+            "{mode:?}: broke at {t}, expected {t_star}"
+        );
+        assert!(!bond.intact && bond.normal_force == 0.0 && bond.moment == 0.0);
+    }
+}
+
+#[test]
+fn single_precision_disc_settles_too() {
+    // f32 instantiation of the whole chain: contact, law, integrator.
+    let mut p = Particle::<f32>::disc([0.0, 0.11], 0.1, 2.6);
+    let wall = Wall {
+        point: [0.0f32, 0.0],
+        normal: [0.0, 1.0],
+    };
+    let law = ContactLaw::elastic(1e5f32, 6e5, 0.5).with_restitution(0.5, p.mass);
+    let dt = contact_duration(1e5f32, p.mass, 0.0) / 50.0;
+    let mut shear = 0.0f32;
+    let mut overlap = 0.0f32;
+    for _ in 0..20_000 {
+        let (f, t) = match wall_contact(&p, &wall) {
+            Some(c) => {
+                overlap = c.overlap;
+                let fc = linear_contact_force(
+                    &law,
+                    &c,
+                    &BodyState::synchronous(&p, dt),
+                    &BodyState::fixed(c.point_j),
+                    &mut shear,
+                    dt,
+                );
+                (fc.force_on_i, fc.torque_on_i)
+            }
+            None => ([0.0; 2], 0.0),
+        };
+        central_difference_step(&mut p, f, t, [0.0, -981.0], 0.7, dt);
+    }
+    let expected = p.mass * 981.0 / 1e5;
+    // The overlap (8e-4) is computed as h − (c − p)·m with c ≈ 0.1: f32 cancellation leaves ~ulp(0.1) ≈ 7e-9,
+    // i.e. ~1e-5 of the overlap; allow 1e-4.
+    assert!(
+        (overlap - expected).abs() < 1e-4 * expected,
+        "{overlap} vs {expected}"
+    );
+}
