@@ -302,6 +302,9 @@ proptest! {
         let c3 = candidate_pairs(&grid, &positions, &radii, margin, &start, &order, &mut small).unwrap();
         prop_assert_eq!(c3.found, count.found);
         prop_assert_eq!(c3.stored, count.found.min(1));
+        if c3.stored == 1 {
+            prop_assert_eq!(small[0], got[0], "a short buffer keeps the lexicographically first pairs");
+        }
     }
 }
 

@@ -8,9 +8,11 @@
 //!
 //! Build (O(N + cells)): `cell_start` (length cells + 1) receives the offsets, `cell_particles` (length N) the
 //! particle indices sorted by cell, ascending index within a cell (a stable counting sort). Pairs (i < j) are
-//! then found by visiting, for each i, the 3 × 3 neighbour cells; a bounding-circle test
-//! |c_j − c_i| < R_i + R_j + margin filters them, and the stored pairs are returned sorted lexicographically
-//! (a deterministic order independent of the grid, and the order [`carry_contact_history`] needs).
+//! then found by visiting, for each i, the 3 × 3 neighbour cells, merging their ascending member lists so that
+//! j comes out ascending (no sort: O(N) for a bounded number of particles per cell); a bounding-circle test
+//! |c_j − c_i| < R_i + R_j + margin filters them. The pairs are therefore listed in lexicographic order, which
+//! is deterministic, independent of the grid, and the order [`carry_contact_history`] needs. When the output
+//! buffer is too small it holds the lexicographically first pairs.
 //!
 //! Contact history across steps: [`carry_contact_history`] merges last step's sorted pair list and its
 //! per-pair values (the shear force of [`linear_contact_force`](super::law::linear_contact_force)) into this
@@ -224,32 +226,49 @@ pub fn candidate_pairs<T: Real>(
         let (ix, iy) = grid.cell_coords(pi);
         let (x_lo, x_hi) = neighbour_span(ix, grid.nx);
         let (y_lo, y_hi) = neighbour_span(iy, grid.ny);
+        // Cursors (next slot, end slot) into the neighbour cells' ascending member lists.
+        let mut heads = [(0usize, 0usize); 9];
+        let mut cells = 0;
         for cy in y_lo..=y_hi {
             for cx in x_lo..=x_hi {
                 let c = cell_index(grid.nx, cx, cy);
                 let (s, e) = (cell_start[c], cell_start[c + 1]);
                 // A corrupted offset table yields no pairs rather than a panic.
-                let Some(members) = cell_particles.get(s..e) else {
-                    continue;
-                };
-                for &j in members {
-                    if j <= i || j >= n {
-                        continue;
-                    }
-                    let d = [positions[j][0] - pi[0], positions[j][1] - pi[1]];
-                    let reach = bounding_radii[i] + bounding_radii[j] + margin;
-                    if d[0] * d[0] + d[1] * d[1] < reach * reach {
-                        if let Some(slot) = pairs.get_mut(stored) {
-                            *slot = [i, j];
-                            stored += 1;
-                        }
-                        found += 1;
-                    }
+                if s <= e && e <= cell_particles.len() && cells < heads.len() {
+                    heads[cells] = (s, e);
+                    cells += 1;
                 }
             }
         }
+        // Merge the lists: j comes out ascending, so the pairs are listed in lexicographic order.
+        loop {
+            let mut best: Option<(usize, usize)> = None; // (j, cursor)
+            for (h, &(next, end)) in heads[..cells].iter().enumerate() {
+                if next < end {
+                    let j = cell_particles[next];
+                    if best.is_none_or(|(bj, _)| j < bj) {
+                        best = Some((j, h));
+                    }
+                }
+            }
+            let Some((j, h)) = best else {
+                break;
+            };
+            heads[h].0 += 1;
+            if j <= i || j >= n {
+                continue;
+            }
+            let d = [positions[j][0] - pi[0], positions[j][1] - pi[1]];
+            let reach = bounding_radii[i] + bounding_radii[j] + margin;
+            if d[0] * d[0] + d[1] * d[1] < reach * reach {
+                if let Some(slot) = pairs.get_mut(stored) {
+                    *slot = [i, j];
+                    stored += 1;
+                }
+                found += 1;
+            }
+        }
     }
-    pairs[..stored].sort_unstable();
     Ok(PairCount { found, stored })
 }
 
