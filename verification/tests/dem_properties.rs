@@ -296,7 +296,7 @@ proptest! {
                 }
             }
         }
-        prop_assert_eq!(got, expected);
+        prop_assert_eq!(&got, &expected);
         // A too-small output buffer still counts every pair.
         let mut small = [[0, 0]; 1];
         let c3 = candidate_pairs(&grid, &positions, &radii, margin, &start, &order, &mut small).unwrap();
