@@ -145,6 +145,10 @@ fn restitution_is_recovered_with_the_dashpot() {
             dt,
             true,
         );
+        eprintln!(
+            "e = {e}: with the no-tension clip {:.4}",
+            clipped.restitution
+        );
         assert!(clipped.restitution > r.restitution && clipped.restitution < 1.0);
     }
 }

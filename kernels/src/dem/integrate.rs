@@ -70,6 +70,13 @@ pub fn single_dof_stability_limit<T: Real>(mass: T, stiffness: T) -> T {
     T::lit(2.0) * (mass / stiffness).sqrt()
 }
 
+/// The stability limit of one degree of freedom with viscous damping ratio ζ: 2(√(1 + ζ²) − ζ)/ω, ω = √(k/m)
+/// (REFERENCE §7.2; ζ = 0 gives [`single_dof_stability_limit`]).
+pub fn damped_stability_limit<T: Real>(mass: T, stiffness: T, damping_ratio: T) -> T {
+    let z = damping_ratio;
+    T::lit(2.0) * ((T::one() + z * z).sqrt() - z) * (mass / stiffness).sqrt()
+}
+
 /// PFC's per-particle critical step: min(√(m/Σk_tran), √(I/Σk_rot)); a zero stiffness sum imposes no limit
 /// (+∞).
 pub fn particle_critical_time_step<T: Real>(

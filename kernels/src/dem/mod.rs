@@ -14,6 +14,17 @@
 //! * [`bond`]: [`bond::PointBond`] (eq. 6.13) and [`bond::ParallelBond`] (Potyondy & Cundall 2004, 2-D).
 //! * [`integrate`]: central-difference update and critical time-step estimates.
 //!
+//! A typical dry step (the driver owns every buffer):
+//!
+//! 1. [`grid::build_cell_grid`] then [`grid::candidate_pairs`] (sorted pairs, bounding circles + margin);
+//!    [`grid::carry_contact_history`] moves last step's shear histories onto the new pair list.
+//! 2. For each pair [`contact::closest_approach`] and [`law::linear_contact_force`] (with
+//!    [`law::BodyState::synchronous`] velocities); for each particle and wall [`contact::wall_contact`]; for
+//!    each intact bond [`bond::point_bond_force`] or [`bond::parallel_bond_force`], recording any
+//!    [`bond::BondBreak`]. Sum forces and torques per particle in a fixed order (determinism).
+//! 3. [`integrate::central_difference_step`] for every particle (gravity, local damping α), with a step
+//!    checked once against [`integrate::critical_time_step`].
+//!
 //! Units: the kernels are unit-agnostic; the caller picks one consistent system (the driver uses lattice units,
 //! the dissertation's tables are cgs: cm, g, s, dyne). Angles are in radians, counter-clockwise; torques and
 //! angular velocities are the z-components of the 3-D vectors (positive counter-clockwise). Particles have unit
