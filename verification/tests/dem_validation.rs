@@ -4,8 +4,9 @@
 //! s, dyne): k_n = 1e5 dyne/cm, k_s = 6e5 dyne/cm, μ = 0.5, radius 0.1 cm; areal density 2.6 g/cm².
 use lbdem_kernels::dem::contact::{closest_approach, particle_contact, wall_contact, Contact};
 use lbdem_kernels::dem::integrate::{
-    central_difference_step, critical_time_step, exceeds_critical_time_step, kinetic_energy,
-    particle_critical_time_step, single_dof_stability_limit,
+    central_difference_step, critical_time_step, damped_stability_limit,
+    exceeds_critical_time_step, kinetic_energy, particle_critical_time_step,
+    single_dof_stability_limit,
 };
 use lbdem_kernels::dem::law::{
     contact_duration, damping_ratio_from_restitution, effective_mass, linear_contact_force,
@@ -335,6 +336,11 @@ fn central_difference_stability_limit() {
         particle_critical_time_step(1.0, 0.0, 1.0, 0.0),
         f64::INFINITY
     );
+    // Damping lowers the limit: 2(√(1 + ζ²) − ζ)/ω, equal to 2/ω at ζ = 0 and 2(√2 − 1)/ω at ζ = 1.
+    assert_eq!(damped_stability_limit(m, k, 0.0), limit);
+    let w = (k / m).sqrt();
+    assert!((damped_stability_limit(m, k, 1.0) - 2.0 * (2f64.sqrt() - 1.0) / w).abs() < 1e-15);
+    assert!(damped_stability_limit(m, k, 0.2) < limit);
 }
 
 #[test]
