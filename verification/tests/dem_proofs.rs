@@ -15,3 +15,10 @@ fn counting_sort_is_a_permutation_for_every_small_placement() {
     // 9 grids × Σ_{n=0..3} 64ⁿ placements.
     assert_eq!(runs, 9 * (1 + 64 + 64 * 64 + 64 * 64 * 64));
 }
+
+#[test]
+fn history_merge_is_exact_for_every_pair_of_subsets() {
+    let runs = for_all(dem::history_merge_is_exact);
+    // 32 × 32 subset pairs × {full, short} buffers.
+    assert_eq!(runs, 32 * 32 * 2);
+}

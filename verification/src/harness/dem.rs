@@ -8,9 +8,13 @@
 //!   cell's range, ascending within a cell; and `candidate_pairs` with an unbounded reach lists exactly the
 //!   pairs i < j in the same or adjacent cells at a finite distance (NaN or infinite separations fail the
 //!   bounding-circle test), each once, sorted.
+//! * [`history_merge_is_exact`]: for every pair of subsets of a 5-pair universe (as sorted lists),
+//!   `carry_contact_history` gives each persisting pair its old value, every new pair zero, and counts the
+//!   carried pairs; it refuses short value buffers instead of indexing out of bounds.
 use crate::Chooser;
 use lbdem_kernels::dem::grid::{
-    build_cell_grid, candidate_pairs, cell_index, neighbour_span, CellGrid, PairCount,
+    build_cell_grid, candidate_pairs, carry_contact_history, cell_index, neighbour_span, CellGrid,
+    GridError, PairCount,
 };
 
 /// Coordinates a particle can take in the sort harness (cell size 1, origin 0).
@@ -103,9 +107,67 @@ pub fn counting_sort_is_a_permutation(c: &mut dyn Chooser) {
     assert!(pairs[..stored].windows(2).all(|w| w[0] < w[1]));
 }
 
+/// Body: the O(N) history merge over all subsets of a small universe of sorted pairs.
+pub fn history_merge_is_exact(c: &mut dyn Chooser) {
+    const UNIVERSE: [[usize; 2]; 5] = [[0, 1], [0, 2], [1, 2], [1, 3], [2, 3]];
+    let before = c.usize_in(0, 31);
+    let after = c.usize_in(0, 31);
+    let short = c.boolean();
+    let pick = |mask: usize, out: &mut [[usize; 2]; 5]| {
+        let mut len = 0;
+        for (bit, pair) in UNIVERSE.iter().enumerate() {
+            if mask & (1 << bit) != 0 {
+                out[len] = *pair;
+                len += 1;
+            }
+        }
+        len
+    };
+    let mut prev = [[0usize; 2]; 5];
+    let mut next = [[0usize; 2]; 5];
+    let np = pick(before, &mut prev);
+    let nn = pick(after, &mut next);
+    let prev_values = [10.0f64, 11.0, 12.0, 13.0, 14.0];
+    let mut values = [f64::NAN; 5];
+    if short && nn > 0 {
+        let r = carry_contact_history(
+            &prev[..np],
+            &prev_values[..np],
+            &next[..nn],
+            &mut values[..nn - 1],
+        );
+        assert_eq!(r, Err(GridError::BufferLength));
+        return;
+    }
+    let carried = carry_contact_history(
+        &prev[..np],
+        &prev_values[..np],
+        &next[..nn],
+        &mut values[..nn],
+    )
+    .expect("buffers");
+    let mut expected = 0;
+    for (pair, v) in next[..nn].iter().zip(&values[..nn]) {
+        match prev[..np].iter().position(|p| p == pair) {
+            Some(k) => {
+                assert_eq!(*v, prev_values[k]);
+                expected += 1;
+            }
+            None => assert_eq!(*v, 0.0),
+        }
+    }
+    assert_eq!(carried, expected);
+}
+
 #[cfg(kani)]
 mod kani_proofs {
     use crate::KaniChooser;
+
+    #[kani::proof]
+    #[kani::unwind(8)]
+    fn history_merge_is_exact() {
+        super::history_merge_is_exact(&mut KaniChooser);
+    }
 
     #[kani::proof]
     fn cell_index_in_bounds() {
