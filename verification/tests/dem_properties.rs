@@ -570,3 +570,45 @@ fn ellipse_contacts_are_neither_missed_nor_phantom() {
     assert_eq!(checked, 1024);
     eprintln!("smallest n·dir at first touch: {min_approach:.3}");
 }
+
+#[test]
+fn wall_segment_is_its_half_plane_within_its_extent() {
+    use lbdem_kernels::dem::contact::{wall_contact, wall_segment_contact};
+    use lbdem_kernels::dem::shape::WallSegment;
+    // A platen face from (2, 1) to (0, 1): the particles live below it (normal (0, −1)).
+    let seg = WallSegment {
+        start: [2.0, 1.0],
+        end: [0.0, 1.0],
+    };
+    let (wall, length) = seg.wall();
+    assert_eq!(wall.normal, [0.0, -1.0]);
+    assert_eq!(length, 2.0);
+    for (x, inside) in [
+        (-0.05, false),
+        (0.0, true),
+        (0.7, true),
+        (1.99, true),
+        (2.0, true),
+        (2.01, false),
+    ] {
+        let e = Particle::<f64>::ellipse([x, 1.0 - 0.05 + 1e-3], 0.0, 0.1, 0.05, 1.0);
+        let full = wall_contact(&e, &wall).expect("overlaps the supporting line");
+        assert!((full.overlap - 1e-3).abs() < 1e-12);
+        match wall_segment_contact(&e, &seg) {
+            Some(c) => {
+                assert!(inside, "x = {x}: contact beyond the end");
+                assert_eq!(c, full);
+            }
+            None => assert!(!inside, "x = {x}: contact missed on the face"),
+        }
+    }
+    // Apart from the face: nothing, wherever along it.
+    let far = Particle::disc([1.0, 0.5], 0.1, 1.0);
+    assert!(wall_segment_contact(&far, &seg).is_none());
+    // A degenerate (zero-length) segment never panics.
+    let point = WallSegment {
+        start: [0.0, 0.0],
+        end: [0.0, 0.0],
+    };
+    let _ = wall_segment_contact(&far, &point);
+}

@@ -27,7 +27,7 @@
 //!
 //! No NaN on valid input (positive semi-axes, finite positions): coincident centres give a finite normal
 //! (the first sampled best direction, (1, 0) for two discs) and the full overlap h_A + h_B along it.
-use super::shape::{Particle, Placed, Shape, Wall};
+use super::shape::{Particle, Placed, Shape, Wall, WallSegment};
 use super::vector::{add, dot, norm, perp, scale, sub, unit};
 use crate::Real;
 
@@ -320,4 +320,16 @@ pub fn wall_contact<T: Real>(i: &Particle<T>, wall: &Wall<T>) -> Option<Contact<
     }
     let c = placed_wall(&i.placed(), wall);
     c.is_active().then_some(c)
+}
+
+/// Contact between a particle (i) and a finite wall face (j) if they interpenetrate and the particle's deepest
+/// point projects onto the face (0 ≤ abscissa ≤ length); the ends are open (see [`WallSegment`]).
+pub fn wall_segment_contact<T: Real>(
+    i: &Particle<T>,
+    segment: &WallSegment<T>,
+) -> Option<Contact<T>> {
+    let (wall, length) = segment.wall();
+    let c = wall_contact(i, &wall)?;
+    let s = segment.abscissa(c.point_j);
+    (s >= T::zero() && s <= length).then_some(c)
 }

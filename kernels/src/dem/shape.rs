@@ -9,7 +9,10 @@
 //!   Its radius of curvature there is ρ = a²b²/h³. For a disc h = ρ = r. Ellipses are centrally symmetric, so
 //!   h(−n) = h(n).
 //! * A wall is a half-plane {x : (x − p)·m ≤ 0} with a unit outward normal m pointing into the region where the
-//!   particles live; it is fixed, with infinite mass.
+//!   particles live; it has infinite mass (a moving platen is a wall whose velocity the caller supplies to the
+//!   contact law). A [`WallSegment`] is the same face limited to a stretch from `start` to `end`, with the
+//!   outward normal on the left of start → end; its ends are not modelled (a particle whose deepest point is
+//!   beyond an end does not touch it), which suits platens longer than the sample.
 //!
 //! Units: any consistent system (lengths, masses, times chosen by the caller). Support values use a plain
 //! √(x² + y²) (not `hypot`, which is several times slower): lengths must stay below ~1e150 (f64) / 1e18 (f32).
@@ -243,5 +246,43 @@ impl<T: Real> Wall<T> {
     pub fn project(&self, x: [T; 2]) -> [T; 2] {
         let s = self.signed_distance(x);
         add(x, scale(self.normal, -s))
+    }
+}
+
+/// A finite straight wall face from `start` to `end`; the particles live on its left (outward normal =
+/// (end − start) rotated by +90°, normalised). The ends are open: see the module documentation.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct WallSegment<T> {
+    /// First end point.
+    pub start: [T; 2],
+    /// Second end point.
+    pub end: [T; 2],
+}
+
+impl<T: Real> WallSegment<T> {
+    /// The supporting half-plane (its wall) and the segment length. A zero-length segment gives the normal
+    /// (0, 1) and length 0.
+    pub fn wall(&self) -> (Wall<T>, T) {
+        let e = [self.end[0] - self.start[0], self.end[1] - self.start[1]];
+        let length = e[0].hypot(e[1]);
+        let normal = if length > T::zero() {
+            [-e[1] / length, e[0] / length]
+        } else {
+            [T::zero(), T::one()]
+        };
+        (
+            Wall {
+                point: self.start,
+                normal,
+            },
+            length,
+        )
+    }
+
+    /// Position of the projection of `x` along the segment, from 0 at `start` to the length at `end`.
+    pub fn abscissa(&self, x: [T; 2]) -> T {
+        let (wall, _) = self.wall();
+        let tangent = [wall.normal[1], -wall.normal[0]];
+        dot([x[0] - self.start[0], x[1] - self.start[1]], tangent)
     }
 }
