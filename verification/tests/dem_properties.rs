@@ -612,3 +612,35 @@ fn wall_segment_is_its_half_plane_within_its_extent() {
     };
     let _ = wall_segment_contact(&far, &point);
 }
+
+proptest! {
+    #![proptest_config(config(64))]
+
+    /// Rigid-body motion of a bonded pair (translation U plus rotation Ω about any point) loads neither bond
+    /// nor contact: the relative velocity at the bond point and the relative rotation vanish.
+    #[test]
+    fn rigid_motion_loads_no_parallel_bond_or_contact(
+        u in prop::array::uniform2(-2.0f64..2.0), omega in -10.0f64..10.0, phi in 0.0f64..6.3,
+        pivot in prop::array::uniform2(-1.0f64..1.0),
+    ) {
+        let ci = [0.2, -0.1];
+        let cj = [0.2 + 0.19 * phi.cos(), -0.1 + 0.19 * phi.sin()];
+        let rigid = |c: [f64; 2]| BodyState {
+            position: c,
+            velocity: [u[0] - omega * (c[1] - pivot[1]), u[1] + omega * (c[0] - pivot[0])],
+            angular_velocity: omega,
+        };
+        let mut bond = ParallelBond::new(0.1, 0.1, 1.0, 1e6, 4e5, 1e9, 1e9);
+        for _ in 0..10 {
+            let f = parallel_bond_force(&mut bond, &rigid(ci), 0.1, &rigid(cj), 0.1, 1e-3);
+            prop_assert!(f.force_on_j.iter().all(|x| x.abs() < 1e-9) && f.torque_on_j.abs() < 1e-9);
+        }
+        let law = ContactLaw::elastic(1e3, 6e2, 0.5);
+        let c = disc_disc(ci, 0.1, cj, 0.1);
+        let mut shear = 0.0;
+        let f = linear_contact_force(&law, &c, &rigid(ci), &rigid(cj), &mut shear, 1e-3);
+        prop_assert!(shear.abs() < 1e-12);
+        // Only the elastic normal force k_n δ remains.
+        prop_assert!((f.normal_force - 1e3 * 0.01).abs() < 1e-9);
+    }
+}
