@@ -9,7 +9,9 @@ use lbdem_kernels::dem::contact::{
     closest_approach, disc_disc, ellipse_disc, ellipse_ellipse, ellipse_wall, particle_contact,
     Contact,
 };
-use lbdem_kernels::dem::grid::{build_cell_grid, candidate_pairs, carry_contact_history, CellGrid};
+use lbdem_kernels::dem::grid::{
+    build_cell_grid, candidate_pairs, carry_contact_history, cell_grid_scratch_len, CellGrid,
+};
 use lbdem_kernels::dem::law::{linear_contact_force, BodyState, ContactLaw};
 use lbdem_kernels::dem::shape::{Particle, Placed, Wall};
 use lbdem_kernels::dem::vector::{cross, sub};
@@ -275,8 +277,9 @@ proptest! {
         let radii: Vec<f64> = pts.iter().map(|p| p.2).collect();
         let margin = 0.01;
         let grid = CellGrid::covering([0.0, 0.0], [5.0, 3.0], 2.0 * 0.25 + margin, 64).unwrap();
-        let mut start = vec![0; grid.cell_start_len()];
-        let mut order = vec![0; positions.len()];
+        let (start_len, order_len) = cell_grid_scratch_len(&grid, positions.len());
+        let mut start = vec![0; start_len];
+        let mut order = vec![0; order_len];
         build_cell_grid(&grid, &positions, &mut start, &mut order).unwrap();
         let mut pairs = vec![[0, 0]; 4000];
         let count = candidate_pairs(&grid, &positions, &radii, margin, &start, &order, &mut pairs).unwrap();

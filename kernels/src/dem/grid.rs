@@ -158,6 +158,12 @@ impl<T: Real> CellGrid<T> {
     }
 }
 
+/// Lengths of the two caller buffers of [`build_cell_grid`] (the `*_scratch_len` convention):
+/// (`cell_start`: cells + 1, `cell_particles`: the particle count).
+pub fn cell_grid_scratch_len<T: Real>(grid: &CellGrid<T>, particles: usize) -> (usize, usize) {
+    (grid.cell_start_len(), particles)
+}
+
 /// Bin the particles into the grid by counting sort. After the call the particles of cell c are
 /// `cell_particles[cell_start[c]..cell_start[c + 1]]`, in ascending index order.
 pub fn build_cell_grid<T: Real>(
