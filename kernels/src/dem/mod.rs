@@ -13,6 +13,7 @@
 //! * [`law`]: the linear contact law with incremental shear history, restitution → damping, local damping.
 //! * [`bond`]: [`bond::PointBond`] (eq. 6.13) and [`bond::ParallelBond`] (Potyondy & Cundall 2004, 2-D).
 //! * [`integrate`]: central-difference update and critical time-step estimates.
+//! * [`assembly`]: whole-assembly passes (pair contacts, wall contacts, integration) over caller slices.
 //!
 //! A typical dry step (the driver owns every buffer):
 //!
@@ -29,6 +30,7 @@
 //! the dissertation's tables are cgs: cm, g, s, dyne). Angles are in radians, counter-clockwise; torques and
 //! angular velocities are the z-components of the 3-D vectors (positive counter-clockwise). Particles have unit
 //! thickness, so "mass" and "stiffness" are per unit thickness where a 2-D reading needs it.
+pub mod assembly;
 pub mod bond;
 pub mod contact;
 pub mod grid;
