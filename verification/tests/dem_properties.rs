@@ -647,3 +647,78 @@ proptest! {
         prop_assert!((f.normal_force - 1e3 * 0.01).abs() < 1e-9);
     }
 }
+
+#[test]
+fn assembly_passes_refuse_bad_input_without_panicking() {
+    use lbdem_kernels::dem::assembly::{
+        add_pair_contact_forces, add_wall_contact_forces, integrate_all, AssemblyError,
+        ContactModel,
+    };
+    let model = ContactModel {
+        normal_stiffness: 1e5,
+        shear_stiffness: 6e5,
+        friction: 0.5,
+        restitution: 1.0,
+        no_tension: true,
+    };
+    let mut ps = [
+        Particle::disc([0.0, 0.0], 0.1, 1.0),
+        Particle::disc([0.15, 0.0], 0.1, 1.0),
+    ];
+    let (mut f, mut t) = ([[0.0f64; 2]; 2], [0.0f64; 2]);
+    let mut shear = [0.0; 1];
+    for bad in [[0, 2], [1, 1]] {
+        assert_eq!(
+            add_pair_contact_forces(&model, &ps, &[bad], &mut shear, 1e-5, &mut f, &mut t),
+            Err(AssemblyError::BadPair)
+        );
+    }
+    assert_eq!(
+        add_pair_contact_forces(&model, &ps, &[[0, 1]], &mut [], 1e-5, &mut f, &mut t),
+        Err(AssemblyError::BufferLength)
+    );
+    assert_eq!(
+        add_pair_contact_forces(&model, &ps, &[[0, 1]], &mut shear, 1e-5, &mut f, &mut t),
+        Ok(1)
+    );
+    // Newton's third law survives the accumulation; the overlap 0.05 gives k_n δ = 5000.
+    assert_eq!(f[0], [-f[1][0], -f[1][1]]);
+    assert!((f[1][0] - 5000.0).abs() < 1e-9 && f[1][1] == 0.0);
+    let walls = [Wall {
+        point: [0.0, -0.05],
+        normal: [0.0, 1.0],
+    }];
+    let mut reaction = [[0.0f64; 2]; 1];
+    assert_eq!(
+        add_wall_contact_forces(
+            &model,
+            &ps,
+            &walls,
+            &mut [0.0; 1],
+            1e-5,
+            &mut f,
+            &mut t,
+            &mut reaction
+        ),
+        Err(AssemblyError::BufferLength)
+    );
+    let mut wall_shear = [0.0; 2];
+    assert_eq!(
+        add_wall_contact_forces(
+            &model,
+            &ps,
+            &walls,
+            &mut wall_shear,
+            1e-5,
+            &mut f,
+            &mut t,
+            &mut reaction
+        ),
+        Ok(2)
+    );
+    assert!((reaction[0][1] - 2.0 * 1e5 * 0.05).abs() < 1e-9);
+    assert_eq!(
+        integrate_all(&mut ps, &f[..1], &t, [0.0; 2], 0.0, 1e-5),
+        Err(AssemblyError::BufferLength)
+    );
+}
