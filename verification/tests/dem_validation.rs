@@ -774,3 +774,15 @@ fn oblique_ellipse_collision_conserves_momentum_and_angular_momentum() {
         "sliding friction dissipated energy: {e0} → {e1}"
     );
 }
+
+/// Eq. 2.2 with the dissertation's table 2.1 (model 5U-4: E_c = Ē_c = 23.5 GPa, k_n/k_s = k̄_n/k̄_s = 0.5) for
+/// the smallest and largest particles of ch. 2 (D = 1.0 and 1.66 mm): SI units, per metre of thickness.
+#[test]
+fn bonded_particle_stiffnesses_follow_eq_2_2() {
+    use lbdem_kernels::dem::bond::BondedParticleStiffness;
+    let s = BondedParticleStiffness::<f64>::from_moduli(23.5e9, 0.5, 23.5e9, 0.5, 0.5e-3, 0.83e-3);
+    assert_eq!(s.normal, 47.0e9); // k_n = 2 t E_c
+    assert_eq!(s.shear, 94.0e9); // k_s = k_n / 0.5
+    assert!((s.bond_normal - 23.5e9 / 1.33e-3).abs() < 1e-6 * s.bond_normal);
+    assert!((s.bond_shear - 2.0 * s.bond_normal).abs() < 1e-6 * s.bond_shear);
+}

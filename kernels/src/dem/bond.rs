@@ -19,6 +19,10 @@
 //! τ̄ = |F̄_s|/A; the bond breaks in tension when σ̄ ≥ σ̄_c (checked first) or in shear when τ̄ ≥ τ̄_c, and then
 //! carries nothing. In 2-D the shear force is a scalar along the current tangent, i.e. it rotates with the bond.
 //!
+//! **Stiffness calibration** (dissertation eq. 2.2, P&C 2004 eq. 18, unit thickness t = 1):
+//! k_n = 2tE_c, k_s = k_n/(k_n/k_s), k̄_n = Ē_c/(R_A + R_B), k̄_s = k̄_n/(k̄_n/k̄_s); see
+//! [`BondedParticleStiffness`].
+//!
 //! Units: k_b force/length; k̄_n, k̄_s stress/length (force per area per length, area per unit thickness);
 //! strengths σ̄_c, τ̄_c stress; F_crit force.
 use super::contact::closest_approach;
@@ -307,5 +311,40 @@ pub fn parallel_bond_force<T: Real>(
         torque_on_i: cross(sub(x, body_i.position), force_on_i) - bond.moment,
         torque_on_j: cross(sub(x, body_j.position), force_on_j) + bond.moment,
         broke: None,
+    }
+}
+
+/// Contact and parallel-bond stiffnesses of a bonded-particle model from its moduli (dissertation eq. 2.2).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BondedParticleStiffness<T> {
+    /// Contact normal stiffness k_n = 2tE_c (t = 1).
+    pub normal: T,
+    /// Contact shear stiffness k_s = k_n/(k_n/k_s).
+    pub shear: T,
+    /// Parallel-bond normal stiffness per unit area k̄_n = Ē_c/(R_A + R_B).
+    pub bond_normal: T,
+    /// Parallel-bond shear stiffness per unit area k̄_s = k̄_n/(k̄_n/k̄_s).
+    pub bond_shear: T,
+}
+
+impl<T: Real> BondedParticleStiffness<T> {
+    /// Eq. 2.2 for a pair of radii `radius_a`, `radius_b`: contact modulus E_c and ratio k_n/k_s, bond modulus
+    /// Ē_c and ratio k̄_n/k̄_s.
+    pub fn from_moduli(
+        contact_modulus: T,
+        contact_stiffness_ratio: T,
+        bond_modulus: T,
+        bond_stiffness_ratio: T,
+        radius_a: T,
+        radius_b: T,
+    ) -> Self {
+        let normal = T::lit(2.0) * contact_modulus;
+        let bond_normal = bond_modulus / (radius_a + radius_b);
+        BondedParticleStiffness {
+            normal,
+            shear: normal / contact_stiffness_ratio,
+            bond_normal,
+            bond_shear: bond_normal / bond_stiffness_ratio,
+        }
     }
 }
