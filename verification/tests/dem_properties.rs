@@ -722,3 +722,30 @@ fn assembly_passes_refuse_bad_input_without_panicking() {
         Err(AssemblyError::BufferLength)
     );
 }
+
+#[test]
+fn contact_model_critical_step_is_the_pfc_estimate() {
+    use lbdem_kernels::dem::assembly::ContactModel;
+    let model = ContactModel {
+        normal_stiffness: 1e5f64,
+        shear_stiffness: 6e5,
+        friction: 0.5,
+        restitution: 0.5,
+        no_tension: true,
+    };
+    let small = Particle::disc([0.0, 0.0], 0.07, 2.6);
+    let large = Particle::ellipse([0.0, 0.0], 0.3, 0.11, 0.055, 2.6);
+    let dt = model.critical_time_step(&[large, small], 4.0);
+    // k = max(k_n, k_s) = 6e5, z = 4. Disc: rotation √(I/(z k_s r²)) = √(m/(2 z k_s)), below its translation
+    // √(m/(z k)). Ellipse (a = 0.11, b/a = 0.5): I = m(a² + b²)/4 = 0.3125 m a² with lever arm a, so its rotation
+    // limit √(0.3125 m/(z k_s)) is the smallest (8.02e-5 s against 9.13e-5 s for the disc).
+    let disc_rot = (small.mass / (2.0 * 4.0 * 6e5)).sqrt();
+    let ellipse_rot = (large.moment_of_inertia / (4.0 * 6e5 * 0.11 * 0.11)).sqrt();
+    assert!(ellipse_rot < disc_rot);
+    let expected = ellipse_rot;
+    assert!(
+        (dt - expected).abs() < 1e-12 * expected,
+        "{dt} vs {expected}"
+    );
+    assert_eq!(model.critical_time_step(&[], 4.0), f64::INFINITY);
+}

@@ -9,7 +9,7 @@
 //!
 //! Units: as the per-contact kernels (consistent, caller-chosen).
 use super::contact::{closest_approach, wall_contact};
-use super::integrate::central_difference_step;
+use super::integrate::{central_difference_step, particle_critical_time_step};
 use super::law::{effective_mass, linear_contact_force, BodyState, ContactLaw};
 use super::shape::{Particle, Wall};
 use super::vector::add;
@@ -42,6 +42,26 @@ impl<T: Real> ContactModel<T> {
         } else {
             base.with_restitution(self.restitution, effective_mass(mass_i, mass_j))
         }
+    }
+
+    /// A-priori PFC critical step of an assembly (REFERENCE §7.2) assuming every particle carries
+    /// `coordination` contacts: per particle √(m/(z k)) for translation with k = max(k_n, k_s), and
+    /// √(I/(z k_s R²)) for rotation with R the bounding radius (the largest lever arm); the minimum over the
+    /// particles (+∞ for none). Multiply by a safety factor (PFC ≈ 0.8) before use.
+    pub fn critical_time_step(&self, particles: &[Particle<T>], coordination: T) -> T {
+        let k = self.normal_stiffness.max(self.shear_stiffness);
+        particles
+            .iter()
+            .map(|p| {
+                let r = p.shape.bounding_radius();
+                particle_critical_time_step(
+                    p.mass,
+                    coordination * k,
+                    p.moment_of_inertia,
+                    coordination * self.shear_stiffness * r * r,
+                )
+            })
+            .fold(T::infinity(), |a, b| a.min(b))
     }
 }
 
