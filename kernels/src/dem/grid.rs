@@ -19,7 +19,7 @@
 //! step's list in O(N): a pair that persists keeps its value, a new pair starts from zero, and a pair that
 //! disappeared is dropped.
 //!
-//! The index arithmetic (`cell_index`, `neighbour_span`, the counting sort) is proved in bounds for all small
+//! The index arithmetic (`cell_index`, `neighbour_span`, the counting sort, the history merge) is proved for all small
 //! grids by the bounded-exhaustive harness in `verification/src/harness/dem.rs`.
 use crate::Real;
 
