@@ -1,0 +1,350 @@
+//! Bonds between particles: the point bond of the dissertation (eq. 6.13) and the Potyondy & Cundall (2004)
+//! parallel bond in 2-D.
+//!
+//! **Point bond** (dissertation ch. 6.6, eq. 6.13, table 6.1: k_b = 1e5 dyne/cm, F_crit = 700 dyne). At bonding
+//! the closest surface points of the two particles (their support points along the contact normal, see
+//! [`closest_approach`]) become material points fixed in each body, and the gap vector g₀ = p_j − p_i between
+//! them is recorded. Later the spring force on j is F_j = −k_b Δx, with Δx = g − R(φ̄) g₀ the change of the gap
+//! vector, where R(φ̄) rotates g₀ by the mean rotation of the two particles since bonding (so a rigid rotation
+//! of the bonded pair stretches nothing). Both forces act at the midpoint of the material points, so force and
+//! moment balance exactly. The bond breaks for good when |F| ≥ F_crit; as the dissertation notes it has no
+//! separate shear strength. The break mode recorded is the dominant component of Δx along the bond normal:
+//! tension (opening), compression (closing) or shear (sliding).
+//!
+//! **Parallel bond** (Potyondy & Cundall 2004, IJRMMS 41, 1329–1364; REFERENCE §7.4), 2-D with unit thickness:
+//! R̄ = λ̄ min(R_i, R_j), A = 2R̄, I = 2R̄³/3. The bond sits at the point of the centre line midway across the
+//! gap between the two radii; with ΔU_n = −(v·n)Δt (> 0 approaching), ΔU_s = (v·t)Δt, Δθ = (ω_j − ω_i)Δt:
+//! F̄_n += k̄_n A ΔU_n (compression positive), F̄_s −= k̄_s A ΔU_s, M̄ −= k̄_n I Δθ. The force on j is
+//! F̄_n n + F̄_s t and the moment on j is M̄ (opposites on i). Peak stresses σ̄ = −F̄_n/A + |M̄|R̄/I and
+//! τ̄ = |F̄_s|/A; the bond breaks in tension when σ̄ ≥ σ̄_c (checked first) or in shear when τ̄ ≥ τ̄_c, and then
+//! carries nothing. In 2-D the shear force is a scalar along the current tangent, i.e. it rotates with the bond.
+//!
+//! **Stiffness calibration** (dissertation eq. 2.2, P&C 2004 eq. 18, unit thickness t = 1):
+//! k_n = 2tE_c, k_s = k_n/(k_n/k_s), k̄_n = Ē_c/(R_A + R_B), k̄_s = k̄_n/(k̄_n/k̄_s); see
+//! [`BondedParticleStiffness`].
+//!
+//! Units: k_b force/length; k̄_n, k̄_s stress/length (force per area per length, area per unit thickness);
+//! strengths σ̄_c, τ̄_c stress; F_crit force.
+use super::contact::closest_approach;
+use super::law::BodyState;
+use super::shape::Particle;
+use super::vector::{add, cross, dot, norm, perp, rotate, scale, sub};
+use crate::Real;
+
+/// How a bond failed.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum BreakMode {
+    /// Tensile failure (opening).
+    Tension,
+    /// Shear failure (sliding).
+    Shear,
+    /// Compressive overload (point bond only: its strength bounds |F| whatever the direction).
+    Compression,
+}
+
+/// The record of a bond that just broke, returned to the caller.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BondBreak<T> {
+    /// Failure mode.
+    pub mode: BreakMode,
+    /// Angle (radians, counter-clockwise from +x) of the bond normal (i → j) when it broke.
+    pub orientation: T,
+    /// Where the bond was (its force point).
+    pub position: [T; 2],
+    /// The load that broke it: |F| for a point bond, the governing peak stress for a parallel bond.
+    pub load: T,
+}
+
+/// Forces and torques of one bond over one step.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BondForce<T> {
+    /// Force on particle i (= −`force_on_j`).
+    pub force_on_i: [T; 2],
+    /// Force on particle j.
+    pub force_on_j: [T; 2],
+    /// Torque on i about its centre.
+    pub torque_on_i: T,
+    /// Torque on j about its centre.
+    pub torque_on_j: T,
+    /// `Some` in the step the bond broke (then all forces are zero).
+    pub broke: Option<BondBreak<T>>,
+}
+
+impl<T: Real> BondForce<T> {
+    fn zero(broke: Option<BondBreak<T>>) -> Self {
+        BondForce {
+            force_on_i: [T::zero(); 2],
+            force_on_j: [T::zero(); 2],
+            torque_on_i: T::zero(),
+            torque_on_j: T::zero(),
+            broke,
+        }
+    }
+}
+
+/// The point bond of eq. 6.13.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PointBond<T> {
+    /// Material point on i, in i's body frame (offset from its centre at zero angle).
+    pub anchor_i: [T; 2],
+    /// Material point on j, in j's body frame.
+    pub anchor_j: [T; 2],
+    /// Gap vector p_j − p_i at bonding (world frame).
+    pub rest_gap: [T; 2],
+    /// Bond normal (i → j) at bonding.
+    pub rest_normal: [T; 2],
+    /// Angles of i and j at bonding.
+    pub rest_angles: [T; 2],
+    /// Stiffness k_b.
+    pub stiffness: T,
+    /// Strength F_crit: the bond breaks when |F| ≥ F_crit.
+    pub strength: T,
+    /// False once broken (for good).
+    pub intact: bool,
+}
+
+impl<T: Real> PointBond<T> {
+    /// Bond two particles at their closest surface points.
+    pub fn between(i: &Particle<T>, j: &Particle<T>, stiffness: T, strength: T) -> Self {
+        let c = closest_approach(i, j);
+        PointBond {
+            anchor_i: rotate(sub(c.point_i, i.position), -i.angle),
+            anchor_j: rotate(sub(c.point_j, j.position), -j.angle),
+            rest_gap: sub(c.point_j, c.point_i),
+            rest_normal: c.normal,
+            rest_angles: [i.angle, j.angle],
+            stiffness,
+            strength,
+            intact: true,
+        }
+    }
+
+    /// Current world positions of the two material points.
+    pub fn material_points(&self, i: &Particle<T>, j: &Particle<T>) -> ([T; 2], [T; 2]) {
+        (
+            add(i.position, rotate(self.anchor_i, i.angle)),
+            add(j.position, rotate(self.anchor_j, j.angle)),
+        )
+    }
+
+    /// Δx = g − R(φ̄) g₀ and the rotated bond normal R(φ̄) n₀.
+    pub fn stretch(&self, i: &Particle<T>, j: &Particle<T>) -> ([T; 2], [T; 2]) {
+        let (pi, pj) = self.material_points(i, j);
+        let mean =
+            T::lit(0.5) * ((i.angle - self.rest_angles[0]) + (j.angle - self.rest_angles[1]));
+        let (c, s) = (mean.cos(), mean.sin());
+        let rot = |v: [T; 2]| [c * v[0] - s * v[1], s * v[0] + c * v[1]];
+        (sub(sub(pj, pi), rot(self.rest_gap)), rot(self.rest_normal))
+    }
+}
+
+/// Evaluate a point bond (eq. 6.13); breaks it when |F| ≥ F_crit. A broken bond exerts nothing.
+pub fn point_bond_force<T: Real>(
+    bond: &mut PointBond<T>,
+    i: &Particle<T>,
+    j: &Particle<T>,
+) -> BondForce<T> {
+    if !bond.intact {
+        return BondForce::zero(None);
+    }
+    let (pi, pj) = bond.material_points(i, j);
+    let x = scale(add(pi, pj), T::lit(0.5));
+    let (dx, n) = bond.stretch(i, j);
+    let force_on_j = scale(dx, -bond.stiffness);
+    let magnitude = norm(force_on_j);
+    if magnitude >= bond.strength {
+        bond.intact = false;
+        let normal_part = dot(dx, n);
+        let shear_part = dot(dx, perp(n)).abs();
+        let mode = if shear_part > normal_part.abs() {
+            BreakMode::Shear
+        } else if normal_part >= T::zero() {
+            BreakMode::Tension
+        } else {
+            BreakMode::Compression
+        };
+        return BondForce::zero(Some(BondBreak {
+            mode,
+            orientation: n[1].atan2(n[0]),
+            position: x,
+            load: magnitude,
+        }));
+    }
+    let force_on_i = [-force_on_j[0], -force_on_j[1]];
+    BondForce {
+        force_on_i,
+        force_on_j,
+        torque_on_i: cross(sub(x, i.position), force_on_i),
+        torque_on_j: cross(sub(x, j.position), force_on_j),
+        broke: None,
+    }
+}
+
+/// The Potyondy–Cundall parallel bond, 2-D, unit thickness.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ParallelBond<T> {
+    /// Bond radius R̄ = λ̄ min(R_i, R_j).
+    pub radius: T,
+    /// Normal stiffness per unit area k̄_n.
+    pub normal_stiffness: T,
+    /// Shear stiffness per unit area k̄_s.
+    pub shear_stiffness: T,
+    /// Tensile strength σ̄_c.
+    pub tensile_strength: T,
+    /// Shear strength τ̄_c.
+    pub shear_strength: T,
+    /// Normal force F̄_n (compression positive).
+    pub normal_force: T,
+    /// Shear force F̄_s on j along the tangent t = n rotated by +90°.
+    pub shear_force: T,
+    /// Bending moment M̄ on j.
+    pub moment: T,
+    /// False once broken.
+    pub intact: bool,
+}
+
+impl<T: Real> ParallelBond<T> {
+    /// A fresh (unloaded) bond between particles of radii `radius_i`, `radius_j` with multiplier λ̄.
+    pub fn new(
+        radius_i: T,
+        radius_j: T,
+        multiplier: T,
+        normal_stiffness: T,
+        shear_stiffness: T,
+        tensile_strength: T,
+        shear_strength: T,
+    ) -> Self {
+        ParallelBond {
+            radius: multiplier * radius_i.min(radius_j),
+            normal_stiffness,
+            shear_stiffness,
+            tensile_strength,
+            shear_strength,
+            normal_force: T::zero(),
+            shear_force: T::zero(),
+            moment: T::zero(),
+            intact: true,
+        }
+    }
+
+    /// Cross-section area A = 2R̄ (unit thickness).
+    pub fn area(&self) -> T {
+        T::lit(2.0) * self.radius
+    }
+
+    /// Second moment of area I = 2R̄³/3.
+    pub fn inertia(&self) -> T {
+        T::lit(2.0 / 3.0) * self.radius * self.radius * self.radius
+    }
+
+    /// Peak tensile stress σ̄ = −F̄_n/A + |M̄|R̄/I.
+    pub fn max_tensile_stress(&self) -> T {
+        -self.normal_force / self.area() + self.moment.abs() * self.radius / self.inertia()
+    }
+
+    /// Peak shear stress τ̄ = |F̄_s|/A.
+    pub fn max_shear_stress(&self) -> T {
+        self.shear_force.abs() / self.area()
+    }
+}
+
+/// Update a parallel bond over a step `dt` (incremental forces from the relative motion), check its strength,
+/// and return its forces. `radius_i`, `radius_j` place the bond on the centre line (for ellipses pass the
+/// radii used to build it). A broken bond exerts nothing.
+pub fn parallel_bond_force<T: Real>(
+    bond: &mut ParallelBond<T>,
+    body_i: &BodyState<T>,
+    radius_i: T,
+    body_j: &BodyState<T>,
+    radius_j: T,
+    dt: T,
+) -> BondForce<T> {
+    if !bond.intact {
+        return BondForce::zero(None);
+    }
+    let d = sub(body_j.position, body_i.position);
+    let dist = norm(d);
+    let n = if dist > T::zero() {
+        scale(d, T::one() / dist)
+    } else {
+        [T::one(), T::zero()]
+    };
+    let t = perp(n);
+    let x = add(
+        body_i.position,
+        scale(n, radius_i + T::lit(0.5) * (dist - radius_i - radius_j)),
+    );
+    let v = sub(body_j.velocity_at(x), body_i.velocity_at(x));
+    let (area, inertia) = (bond.area(), bond.inertia());
+    let du_n = -dot(v, n) * dt;
+    let du_s = dot(v, t) * dt;
+    let dtheta = (body_j.angular_velocity - body_i.angular_velocity) * dt;
+    bond.normal_force += bond.normal_stiffness * area * du_n;
+    bond.shear_force -= bond.shear_stiffness * area * du_s;
+    bond.moment -= bond.normal_stiffness * inertia * dtheta;
+    let sigma = bond.max_tensile_stress();
+    let tau = bond.max_shear_stress();
+    let mode = if sigma >= bond.tensile_strength {
+        Some((BreakMode::Tension, sigma))
+    } else if tau >= bond.shear_strength {
+        Some((BreakMode::Shear, tau))
+    } else {
+        None
+    };
+    if let Some((mode, load)) = mode {
+        bond.intact = false;
+        bond.normal_force = T::zero();
+        bond.shear_force = T::zero();
+        bond.moment = T::zero();
+        return BondForce::zero(Some(BondBreak {
+            mode,
+            orientation: n[1].atan2(n[0]),
+            position: x,
+            load,
+        }));
+    }
+    let force_on_j = add(scale(n, bond.normal_force), scale(t, bond.shear_force));
+    let force_on_i = [-force_on_j[0], -force_on_j[1]];
+    BondForce {
+        force_on_i,
+        force_on_j,
+        torque_on_i: cross(sub(x, body_i.position), force_on_i) - bond.moment,
+        torque_on_j: cross(sub(x, body_j.position), force_on_j) + bond.moment,
+        broke: None,
+    }
+}
+
+/// Contact and parallel-bond stiffnesses of a bonded-particle model from its moduli (dissertation eq. 2.2).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BondedParticleStiffness<T> {
+    /// Contact normal stiffness k_n = 2tE_c (t = 1).
+    pub normal: T,
+    /// Contact shear stiffness k_s = k_n/(k_n/k_s).
+    pub shear: T,
+    /// Parallel-bond normal stiffness per unit area k̄_n = Ē_c/(R_A + R_B).
+    pub bond_normal: T,
+    /// Parallel-bond shear stiffness per unit area k̄_s = k̄_n/(k̄_n/k̄_s).
+    pub bond_shear: T,
+}
+
+impl<T: Real> BondedParticleStiffness<T> {
+    /// Eq. 2.2 for a pair of radii `radius_a`, `radius_b`: contact modulus E_c and ratio k_n/k_s, bond modulus
+    /// Ē_c and ratio k̄_n/k̄_s.
+    pub fn from_moduli(
+        contact_modulus: T,
+        contact_stiffness_ratio: T,
+        bond_modulus: T,
+        bond_stiffness_ratio: T,
+        radius_a: T,
+        radius_b: T,
+    ) -> Self {
+        let normal = T::lit(2.0) * contact_modulus;
+        let bond_normal = bond_modulus / (radius_a + radius_b);
+        BondedParticleStiffness {
+            normal,
+            shear: normal / contact_stiffness_ratio,
+            bond_normal,
+            bond_shear: bond_normal / bond_stiffness_ratio,
+        }
+    }
+}

@@ -1,0 +1,338 @@
+//! Narrow-phase contact detection between discs, ellipses and walls.
+//!
+//! Every routine returns a [`Contact`]: the unit normal n pointing from body i to body j, the signed overlap δ
+//! (δ > 0: the bodies interpenetrate by δ along n; δ < 0: they are separated by the distance −δ), the two
+//! surface points that realise it (`point_i` on i, `point_j` on j) and the contact point midway between them.
+//!
+//! **Method (convex pairs).** For convex bodies A and B with support functions h_A, h_B about their centres and
+//! d = c_B − c_A, the separating-axis gap along a unit direction n(θ) = (cos θ, sin θ) is
+//!
+//!   s(θ) = n·d − h_A(n) − h_B(−n).
+//!
+//! By the separating-axis theorem max_θ s(θ) is the signed distance between the bodies: their distance when
+//! positive, and minus the penetration depth (the minimum translation that separates them) when negative; the
+//! maximiser is the contact normal and the support points in ±n are the closest (or deepest) points. For
+//! ellipses h is closed-form (see [`shape`](super::shape)), h(−n) = h(n), and
+//! s'(θ) = n'·d − h_A' − h_B', s''(θ) = −s − ρ_A − ρ_B with ρ = a²b²/h³ the radii of curvature. So s is strictly
+//! concave wherever s > −(ρ_A + ρ_B): in the contact regime (overlaps much smaller than b²/a) the maximiser is
+//! isolated and Newton's method converges quadratically to it.
+//!
+//! The routine samples s at [`ELLIPSE_SAMPLES`] equally spaced angles, then refines every sampled strict local
+//! maximum by Newton's method on s' = 0, safeguarded by bisection inside the bracket of the neighbouring samples
+//! (golden-section search when the bracket does not change sign), and keeps the best. Iteration stops when the
+//! Newton step is below 4 ulp of π (or after 60 steps); the overlap is then exact up to rounding, a few ulp of
+//! |d| + a + b. Against the brute-force oracle in `lbdem-reference` (dense boundary sampling, n points and
+//! directions) the largest difference measured is 2.5e-6 of the semi-major axis at n = 2048 and 1.1e-7 at
+//! n = 8192 (falling as 1/n²: the oracle's error); the property tests allow 2e-5. A sweep over 1024
+//! orientations and approach directions finds no missed or phantom contact at ±1e-4 of the touching distance.
+//! The method is symmetric: swapping the pair maps θ to θ + π (the sample set is invariant). Cost: about
+//! 1 µs per pair in f64, 0.4 µs in f32 (measured on the project machine). Walls and disc pairs use closed forms.
+//!
+//! No NaN on valid input (positive semi-axes, finite positions): coincident centres give a finite unit normal
+//! (deterministic; (1, 0) for two discs through [`disc_disc`]) and the overlap along it.
+use super::shape::{Particle, Placed, Shape, Wall, WallSegment};
+use super::vector::{add, dot, norm, perp, scale, sub, unit};
+use crate::Real;
+
+/// Number of equally spaced normal angles sampled before the Newton refinement.
+pub const ELLIPSE_SAMPLES: usize = 32;
+/// (cos θ_k, sin θ_k) for θ_k = 2πk/32, the sample directions (correctly rounded f64).
+#[allow(clippy::approx_constant)]
+const SAMPLE_DIRECTIONS: [[f64; 2]; ELLIPSE_SAMPLES] = [
+    [1.0, 0.0],
+    [0.9807852804032304, 0.19509032201612825],
+    [0.9238795325112867, 0.3826834323650898],
+    [0.8314696123025452, 0.5555702330196022],
+    [0.7071067811865476, 0.7071067811865475],
+    [0.5555702330196023, 0.8314696123025452],
+    [0.38268343236508984, 0.9238795325112867],
+    [0.19509032201612833, 0.9807852804032304],
+    [0.0, 1.0],
+    [-0.1950903220161282, 0.9807852804032304],
+    [-0.3826834323650897, 0.9238795325112867],
+    [-0.555570233019602, 0.8314696123025455],
+    [-0.7071067811865475, 0.7071067811865476],
+    [-0.8314696123025453, 0.5555702330196022],
+    [-0.9238795325112867, 0.3826834323650899],
+    [-0.9807852804032304, 0.1950903220161286],
+    [-1.0, 0.0],
+    [-0.9807852804032304, -0.19509032201612836],
+    [-0.9238795325112868, -0.38268343236508967],
+    [-0.8314696123025455, -0.555570233019602],
+    [-0.7071067811865477, -0.7071067811865475],
+    [-0.5555702330196022, -0.8314696123025452],
+    [-0.38268343236509034, -0.9238795325112865],
+    [-0.19509032201612866, -0.9807852804032303],
+    [0.0, -1.0],
+    [0.1950903220161283, -0.9807852804032304],
+    [0.38268343236509, -0.9238795325112866],
+    [0.5555702330196018, -0.8314696123025455],
+    [0.7071067811865474, -0.7071067811865477],
+    [0.8314696123025452, -0.5555702330196022],
+    [0.9238795325112865, -0.3826834323650904],
+    [0.9807852804032303, -0.19509032201612872],
+];
+const MAX_NEWTON: usize = 60;
+const MAX_GOLDEN: usize = 80;
+
+/// Geometry of a contact (or of the closest approach of two separated bodies).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Contact<T> {
+    /// Contact point: the midpoint of `point_i` and `point_j`.
+    pub point: [T; 2],
+    /// Unit normal from body i to body j.
+    pub normal: [T; 2],
+    /// Signed overlap δ: > 0 interpenetration depth, < 0 separation distance.
+    pub overlap: T,
+    /// Surface point of body i with outward normal `normal`.
+    pub point_i: [T; 2],
+    /// Surface point of body j with outward normal −`normal` (on the wall surface for a wall).
+    pub point_j: [T; 2],
+}
+
+impl<T: Real> Contact<T> {
+    /// Whether the bodies interpenetrate (δ > 0). A touching pair (δ = 0) carries no force and is not active.
+    #[inline(always)]
+    pub fn is_active(&self) -> bool {
+        self.overlap > T::zero()
+    }
+
+    /// The unit tangent t = n rotated by +90°.
+    #[inline(always)]
+    pub fn tangent(&self) -> [T; 2] {
+        perp(self.normal)
+    }
+
+    fn from_points(normal: [T; 2], overlap: T, point_i: [T; 2], point_j: [T; 2]) -> Self {
+        let point = scale(add(point_i, point_j), T::lit(0.5));
+        Contact {
+            point,
+            normal,
+            overlap,
+            point_i,
+            point_j,
+        }
+    }
+}
+
+/// Disc–disc contact (closed form). Coincident centres: normal (1, 0).
+pub fn disc_disc<T: Real>(
+    centre_i: [T; 2],
+    radius_i: T,
+    centre_j: [T; 2],
+    radius_j: T,
+) -> Contact<T> {
+    let d = sub(centre_j, centre_i);
+    let dist = norm(d);
+    let normal = if dist > T::zero() {
+        scale(d, T::one() / dist)
+    } else {
+        [T::one(), T::zero()]
+    };
+    let overlap = radius_i + radius_j - dist;
+    Contact::from_points(
+        normal,
+        overlap,
+        add(centre_i, scale(normal, radius_i)),
+        sub(centre_j, scale(normal, radius_j)),
+    )
+}
+
+/// Contact of a placed disc or ellipse (body i) with a wall (body j). Exact: the deepest point is the support
+/// point in the direction −m, δ = h(m) − (c − p)·m. The normal is −m.
+pub fn placed_wall<T: Real>(body: &Placed<T>, wall: &Wall<T>) -> Contact<T> {
+    let m = wall.normal;
+    let n = [-m[0], -m[1]];
+    let point_i = body.support_point(n);
+    let overlap = body.support_value(m) - wall.signed_distance(body.centre);
+    let point_j = add(point_i, scale(m, overlap));
+    Contact::from_points(n, overlap, point_i, point_j)
+}
+
+/// Disc–wall contact.
+pub fn disc_wall<T: Real>(centre: [T; 2], radius: T, wall: &Wall<T>) -> Contact<T> {
+    placed_wall(&Placed::new(centre, T::zero(), radius, radius), wall)
+}
+
+/// Ellipse–wall contact (exact support point).
+pub fn ellipse_wall<T: Real>(ellipse: &Placed<T>, wall: &Wall<T>) -> Contact<T> {
+    placed_wall(ellipse, wall)
+}
+
+/// s, s', s'' at angle θ (see the module documentation).
+#[inline(always)]
+fn gap<T: Real>(a: &Placed<T>, b: &Placed<T>, d: [T; 2], theta: T) -> (T, T, T) {
+    gap_along(a, b, d, unit(theta))
+}
+
+/// s, s', s'' along the unit direction n.
+#[inline(always)]
+fn gap_along<T: Real>(a: &Placed<T>, b: &Placed<T>, d: [T; 2], n: [T; 2]) -> (T, T, T) {
+    let (ha, dha, ra) = a.support_derivatives(n);
+    let (hb, dhb, rb) = b.support_derivatives(n);
+    let s = dot(n, d) - ha - hb;
+    let ds = dot(perp(n), d) - dha - dhb;
+    let dds = -s - ra - rb;
+    (s, ds, dds)
+}
+
+/// Refine a local maximum of s inside [lo, hi] starting from `start`; returns (θ, s(θ)).
+fn refine<T: Real>(a: &Placed<T>, b: &Placed<T>, d: [T; 2], lo: T, hi: T, start: T) -> (T, T) {
+    let (mut lo, mut hi) = (lo, hi);
+    let (_, g_lo, _) = gap(a, b, d, lo);
+    let (_, g_hi, _) = gap(a, b, d, hi);
+    let tol = T::lit(4.0) * T::epsilon() * T::PI();
+    if g_lo > T::zero() && g_hi < T::zero() {
+        // Safeguarded Newton on s' = 0 (s' decreases through the root).
+        let mut x = start;
+        for _ in 0..MAX_NEWTON {
+            let (_, g, g2) = gap(a, b, d, x);
+            if g > T::zero() {
+                lo = x;
+            } else if g < T::zero() {
+                hi = x;
+            } else {
+                break;
+            }
+            let mut next = if g2 < T::zero() { x - g / g2 } else { lo };
+            if !(next > lo && next < hi) {
+                next = T::lit(0.5) * (lo + hi);
+            }
+            let step = (next - x).abs();
+            x = next;
+            if step <= tol || hi - lo <= tol {
+                break;
+            }
+        }
+        let (s, _, _) = gap(a, b, d, x);
+        (x, s)
+    } else {
+        // Golden-section search for a maximum of s on [lo, hi].
+        let r = T::lit(0.618_033_988_749_894_8);
+        let mut x1 = hi - r * (hi - lo);
+        let mut x2 = lo + r * (hi - lo);
+        let mut f1 = gap(a, b, d, x1).0;
+        let mut f2 = gap(a, b, d, x2).0;
+        for _ in 0..MAX_GOLDEN {
+            if hi - lo <= tol {
+                break;
+            }
+            if f1 < f2 {
+                lo = x1;
+                x1 = x2;
+                f1 = f2;
+                x2 = lo + r * (hi - lo);
+                f2 = gap(a, b, d, x2).0;
+            } else {
+                hi = x2;
+                x2 = x1;
+                f2 = f1;
+                x1 = hi - r * (hi - lo);
+                f1 = gap(a, b, d, x1).0;
+            }
+        }
+        let x = T::lit(0.5) * (lo + hi);
+        let s = gap(a, b, d, x).0;
+        let s0 = gap(a, b, d, start).0;
+        if s0 > s {
+            (start, s0)
+        } else {
+            (x, s)
+        }
+    }
+}
+
+/// Contact between two placed convex shapes (ellipses, or discs as ellipses with a = b), i = `a`, j = `b`, by
+/// maximising the separating-axis gap over the normal angle (see the module documentation). Exact for any
+/// orientation; returns the signed overlap whether or not the shapes touch.
+pub fn ellipse_ellipse<T: Real>(a: &Placed<T>, b: &Placed<T>) -> Contact<T> {
+    let d = sub(b.centre, a.centre);
+    let step = T::lit(core::f64::consts::TAU / ELLIPSE_SAMPLES as f64);
+    let mut s = [T::zero(); ELLIPSE_SAMPLES];
+    let mut best_k = 0;
+    for (sk, n) in s.iter_mut().zip(SAMPLE_DIRECTIONS) {
+        let n = [T::lit(n[0]), T::lit(n[1])];
+        *sk = dot(n, d) - a.support_value(n) - b.support_value(n);
+    }
+    for k in 1..ELLIPSE_SAMPLES {
+        if s[k] > s[best_k] {
+            best_k = k;
+        }
+    }
+    let mut best_theta = step * T::lit(best_k as f64);
+    let mut best_s = s[best_k];
+    let mut refined_any = false;
+    for k in 0..ELLIPSE_SAMPLES {
+        let prev = s[(k + ELLIPSE_SAMPLES - 1) % ELLIPSE_SAMPLES];
+        let next = s[(k + 1) % ELLIPSE_SAMPLES];
+        if s[k] > prev && s[k] >= next {
+            refined_any = true;
+            let theta = step * T::lit(k as f64);
+            let (t, v) = refine(a, b, d, theta - step, theta + step, theta);
+            if v > best_s {
+                best_s = v;
+                best_theta = t;
+            }
+        }
+    }
+    if !refined_any {
+        // A plateau (e.g. concentric discs): refine around the first best sample.
+        let (t, v) = refine(a, b, d, best_theta - step, best_theta + step, best_theta);
+        if v > best_s {
+            best_s = v;
+            best_theta = t;
+        }
+    }
+    let n = unit(best_theta);
+    let point_i = a.support_point(n);
+    let point_j = b.support_point([-n[0], -n[1]]);
+    Contact::from_points(n, -best_s, point_i, point_j)
+}
+
+/// Ellipse (i) – disc (j) contact, by [`ellipse_ellipse`] with the disc's constant support function.
+pub fn ellipse_disc<T: Real>(ellipse: &Placed<T>, centre: [T; 2], radius: T) -> Contact<T> {
+    ellipse_ellipse(ellipse, &Placed::new(centre, T::zero(), radius, radius))
+}
+
+/// Exact signed contact geometry of two particles, i → j, whatever their separation (used to create bonds).
+pub fn closest_approach<T: Real>(i: &Particle<T>, j: &Particle<T>) -> Contact<T> {
+    match (i.shape, j.shape) {
+        (Shape::Disc { radius: ri }, Shape::Disc { radius: rj }) => {
+            disc_disc(i.position, ri, j.position, rj)
+        }
+        _ => ellipse_ellipse(&i.placed(), &j.placed()),
+    }
+}
+
+/// Contact between two particles if they interpenetrate, after a bounding-circle prefilter: `None` when the
+/// bounding circles are disjoint or the overlap is ≤ 0.
+pub fn particle_contact<T: Real>(i: &Particle<T>, j: &Particle<T>) -> Option<Contact<T>> {
+    let reach = i.shape.bounding_radius() + j.shape.bounding_radius();
+    let d = sub(j.position, i.position);
+    if dot(d, d) >= reach * reach {
+        return None;
+    }
+    let c = closest_approach(i, j);
+    c.is_active().then_some(c)
+}
+
+/// Contact between a particle (i) and a wall (j) if they interpenetrate.
+pub fn wall_contact<T: Real>(i: &Particle<T>, wall: &Wall<T>) -> Option<Contact<T>> {
+    if wall.signed_distance(i.position) >= i.shape.bounding_radius() {
+        return None;
+    }
+    let c = placed_wall(&i.placed(), wall);
+    c.is_active().then_some(c)
+}
+
+/// Contact between a particle (i) and a finite wall face (j) if they interpenetrate and the particle's deepest
+/// point projects onto the face (0 ≤ abscissa ≤ length); the ends are open (see [`WallSegment`]).
+pub fn wall_segment_contact<T: Real>(
+    i: &Particle<T>,
+    segment: &WallSegment<T>,
+) -> Option<Contact<T>> {
+    let (wall, length) = segment.wall();
+    let c = wall_contact(i, &wall)?;
+    let s = segment.abscissa(c.point_j);
+    (s >= T::zero() && s <= length).then_some(c)
+}
