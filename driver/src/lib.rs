@@ -9,4 +9,5 @@ pub mod lattice;
 pub mod output;
 pub mod run;
 pub mod scene;
+pub mod solid;
 pub mod units;

@@ -1,0 +1,199 @@
+//! Laboratory loading of a bonded sample between platens: uniaxial (unconfined) and biaxial (servo-confined)
+//! compression at a constant platen speed (dissertation ch. 2: "servo controlled confining pressure, platen
+//! velocity"; REFERENCE §7.4: quasi-static with local damping 0.7).
+//!
+//! * Axial strain ε = (h₀ − h)/h₀, h the distance between the bottom and top platens, h₀ at the start of
+//!   loading; axial stress σ_a = mean of the two axial platens' normal stresses (force / loaded length; the
+//!   loaded length is the initial sample width when unconfined, the current lateral platen distance when
+//!   confined); deviator q = σ_a − σ_a(start) for an unconfined sample, σ_a − σ_confining when confined.
+//! * Young's modulus E: least-squares slope of q against ε over the points with q between 10 % and 50 % of the
+//!   peak (the elastic stretch before bond breakage grows).
+//! * Peak strength: the largest σ_a. The test stops once σ_a has fallen below `post_peak_fraction` × peak after
+//!   the peak, or at `max_strain`.
+//!
+//! Units: consistent (2-D stresses are force per unit length of a unit-thickness sample).
+use lbdem_kernels::Real;
+
+use super::packing::Packing;
+use super::world::{DemWorld, PlatenControl, SampleBox};
+
+/// Parameters of a compression test.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CompressionTest<T> {
+    /// Confining stress (0: unconfined, the lateral platens are removed).
+    pub confining_stress: T,
+    /// Speed of each axial platen (length/time; the strain rate is 2 v/h₀).
+    pub platen_speed: T,
+    /// Steps with the axial platens fixed before loading (the sample settles after the lateral change).
+    pub settle_steps: u64,
+    /// Stop when the strain exceeds this.
+    pub max_strain: T,
+    /// Stop once the stress falls below this fraction of the peak after the peak.
+    pub post_peak_fraction: T,
+    /// Steps between recorded points.
+    pub record_interval: u64,
+}
+
+/// One recorded point of a compression test.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CurvePoint {
+    /// World step.
+    pub step: u64,
+    /// Axial strain ε.
+    pub axial_strain: f64,
+    /// Lateral strain (width change / initial width, extension positive; 0 unconfined... measured from the
+    /// lateral platens when confined, from the particles' bounding box otherwise).
+    pub lateral_strain: f64,
+    /// Axial stress σ_a.
+    pub axial_stress: f64,
+    /// Deviator q.
+    pub deviator_stress: f64,
+    /// Lateral stress (mean of the lateral platens; 0 unconfined).
+    pub lateral_stress: f64,
+    /// Bonds broken so far.
+    pub broken_bonds: usize,
+}
+
+/// What a compression test measured.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CompressionResult {
+    /// The stress–strain record.
+    pub curve: Vec<CurvePoint>,
+    /// Peak axial stress.
+    pub peak_stress: f64,
+    /// Peak deviator stress.
+    pub peak_deviator: f64,
+    /// Axial strain at the peak.
+    pub peak_strain: f64,
+    /// Young's modulus (slope of q against ε between 10 % and 50 % of the peak deviator).
+    pub youngs_modulus: f64,
+    /// Steps of the loading stage.
+    pub steps: u64,
+}
+
+/// Least-squares slope of y against x.
+pub fn slope(points: &[(f64, f64)]) -> f64 {
+    let n = points.len() as f64;
+    if points.len() < 2 {
+        return f64::NAN;
+    }
+    let mx = points.iter().map(|p| p.0).sum::<f64>() / n;
+    let my = points.iter().map(|p| p.1).sum::<f64>() / n;
+    let sxy: f64 = points.iter().map(|p| (p.0 - mx) * (p.1 - my)).sum();
+    let sxx: f64 = points.iter().map(|p| (p.0 - mx) * (p.0 - mx)).sum();
+    sxy / sxx
+}
+
+fn axial_stress<T: Real>(w: &DemWorld<T>, b: &SampleBox) -> T {
+    T::lit(0.5) * (w.platens[b.bottom].stress() + w.platens[b.top].stress())
+}
+
+/// Run a compression test on a bonded packing (consumed world state is mutated in place). `on_record` sees
+/// each recorded point (progress, output).
+pub fn run_compression<T: Real>(
+    packing: &mut Packing<T>,
+    test: &CompressionTest<T>,
+    mut on_record: impl FnMut(&DemWorld<T>, &CurvePoint),
+) -> CompressionResult {
+    let b = packing.sample_box;
+    let w = &mut packing.world;
+    let width0 = w.platens[b.right].wall.point[0] - w.platens[b.left].wall.point[0];
+    let confined = test.confining_stress > T::zero();
+    if confined {
+        let servo = PlatenControl::Servo {
+            target_stress: test.confining_stress,
+            relaxation: T::lit(0.5),
+            max_speed: T::lit(10.0) * test.platen_speed,
+        };
+        w.platens[b.left].control = servo;
+        w.platens[b.right].control = servo;
+    } else {
+        w.platens[b.left].active = false;
+        w.platens[b.right].active = false;
+        w.sample_box = None;
+        w.platens[b.bottom].length = width0;
+        w.platens[b.top].length = width0;
+    }
+    w.platens[b.bottom].control = PlatenControl::Speed(T::zero());
+    w.platens[b.top].control = PlatenControl::Speed(T::zero());
+    for _ in 0..test.settle_steps {
+        w.step();
+    }
+    let h0 = (w.platens[b.top].wall.point[1] - w.platens[b.bottom].wall.point[1]).to_f64_exact();
+    let lateral0 = if confined {
+        (w.platens[b.right].wall.point[0] - w.platens[b.left].wall.point[0]).to_f64_exact()
+    } else {
+        let (lo, hi) = w.bounds();
+        (hi[0] - lo[0]).to_f64_exact()
+    };
+    let start_stress = axial_stress(w, &b).to_f64_exact();
+    let reference = if confined {
+        test.confining_stress.to_f64_exact()
+    } else {
+        start_stress
+    };
+    w.platens[b.bottom].control = PlatenControl::Speed(test.platen_speed);
+    w.platens[b.top].control = PlatenControl::Speed(test.platen_speed);
+    let mut curve = Vec::new();
+    let mut peak = f64::NEG_INFINITY;
+    let mut peak_at = 0;
+    let start_step = w.step_count();
+    let interval = test.record_interval.max(1);
+    loop {
+        for _ in 0..interval {
+            w.step();
+        }
+        let h = (w.platens[b.top].wall.point[1] - w.platens[b.bottom].wall.point[1]).to_f64_exact();
+        let lateral = if confined {
+            (w.platens[b.right].wall.point[0] - w.platens[b.left].wall.point[0]).to_f64_exact()
+        } else {
+            let (lo, hi) = w.bounds();
+            (hi[0] - lo[0]).to_f64_exact()
+        };
+        let sa = axial_stress(w, &b).to_f64_exact();
+        let lateral_stress = if confined {
+            0.5 * (w.platens[b.left].stress() + w.platens[b.right].stress()).to_f64_exact()
+        } else {
+            0.0
+        };
+        let point = CurvePoint {
+            step: w.step_count(),
+            axial_strain: (h0 - h) / h0,
+            lateral_strain: (lateral - lateral0) / lateral0,
+            axial_stress: sa,
+            deviator_stress: sa - reference,
+            lateral_stress,
+            broken_bonds: w.breaks.len(),
+        };
+        on_record(w, &point);
+        curve.push(point);
+        if sa > peak {
+            peak = sa;
+            peak_at = curve.len() - 1;
+        }
+        // Failure: past the peak, bonds broken, and the deviator down to the given fraction of its peak.
+        let q_peak = peak - reference;
+        let past_peak = curve.len() - 1 > peak_at
+            && !w.breaks.is_empty()
+            && q_peak > 0.0
+            && sa - reference < test.post_peak_fraction.to_f64_exact() * q_peak;
+        if past_peak || point.axial_strain > test.max_strain.to_f64_exact() || !sa.is_finite() {
+            break;
+        }
+    }
+    let peak_point = curve[peak_at];
+    let q_peak = peak_point.deviator_stress;
+    let elastic: Vec<(f64, f64)> = curve[..=peak_at]
+        .iter()
+        .filter(|p| p.deviator_stress >= 0.1 * q_peak && p.deviator_stress <= 0.5 * q_peak)
+        .map(|p| (p.axial_strain, p.deviator_stress))
+        .collect();
+    CompressionResult {
+        youngs_modulus: slope(&elastic),
+        peak_stress: peak,
+        peak_deviator: q_peak,
+        peak_strain: peak_point.axial_strain,
+        steps: w.step_count() - start_step,
+        curve,
+    }
+}

@@ -1,0 +1,27 @@
+//! The solid half orchestrated (issue 3, dry): a bonded discrete-element sample the driver owns and steps.
+//!
+//! Physics stays in `lbdem_kernels::dem`; this module owns the buffers and calls the kernels in the order of
+//! the kernels' module guide (broad phase → contacts → bonds → platens → integrate), generates packings with
+//! the dissertation's ch. 2 fill-and-expand procedure, runs laboratory loadings, and writes outputs.
+//!
+//! * [`world`]: [`world::DemWorld`] (particles, platens with constant-speed or servo control, bonds and their
+//!   break records, contact history, broad-phase buffers), its deterministic [`world::DemWorld::step`], and the
+//!   critical-step refusal.
+//! * [`packing`]: seeded fill-and-expand packing to an isotropic stress, then bonding (point or parallel bonds);
+//!   a regular hexagonal packing for benchmarks and snapshots.
+//! * [`loading`]: uniaxial and biaxial (servo-confined) compression at a constant platen speed, with the
+//!   stress–strain record, Young's modulus and peak strength.
+//! * [`vtk`]: legacy VTK particle output (and a parser for tests).
+//! * [`scene`]: the `kind = "dry"` scene (`[packing]`, `[solid]`, `[loading]`) and its run.
+//!
+//! Units: the kernels are unit-agnostic; dry scenes are in cgs or SI as declared, with 2-D stresses meaning
+//! force per unit length of a unit-thickness sample.
+pub mod loading;
+pub mod packing;
+pub mod scene;
+pub mod vtk;
+pub mod world;
+
+pub use loading::{run_compression, CompressionResult, CompressionTest, CurvePoint};
+pub use packing::{boxed_sample, generate_packing, hexagonal_packing, Packing, PackingSpec};
+pub use world::{Bond, BondLaw, BondSpec, BreakRecord, DemWorld, Platen, PlatenControl, SampleBox};

@@ -1,0 +1,464 @@
+//! Packing generation: the fill-and-expand procedure of the dissertation's ch. 2 (after Potyondy & Cundall
+//! 2004's material genesis), and a regular hexagonal packing for benchmarks and snapshots.
+//!
+//! [`generate_packing`]:
+//!
+//! 1. **Sizes.** Draw semi-major axes a uniform in [r_min, r_max] (b = (b/a) a; discs when b/a = 1; random
+//!    orientation in [0, π) for ellipses) until their area Σπab reaches `solid_fraction` × W H.
+//! 2. **Fill.** Place them one by one at random in the W × H box, shrunk by s = √(0.3/solid_fraction) so
+//!    their area fraction is 0.3 (random sequential addition jams only near 0.55 for discs), rejecting
+//!    positions whose bounding circles overlap a placed particle or a wall (up to [`PLACEMENT_ATTEMPTS`] per
+//!    particle; more fails with a typed error naming `packing.solid_fraction`).
+//!    The contacts are frictionless during steps 3–4 (as in P&C's material genesis: a dense, isotropic
+//!    assembly); the friction of `contact` is restored before bonding. During the growth every
+//!    [`CALM_INTERVAL`] steps all velocities are zeroed (PFC's "calm"), and so in the servo stage (the energy
+//!    stored by the growth is bled off quasi-statically instead of flinging particles when the walls
+//!    retreat; measured: without calm the assembly turns into a rattling gas at low target stresses).
+//! 3. **Expand.** Grow every size from s towards 1 (at most (1 − s)/`growth_steps` per step, slowing as the
+//!    least wall stress approaches the target) between fixed walls, with PFC local damping α = 0.7, until the
+//!    least wall stress reaches `isotropic_stress` (P&C's radius expansion; the sizes then end at
+//!    f × the drawn ones, [`Packing::size_factor`]); masses stay those of the drawn size, so the critical step
+//!    is constant.
+//! 4. **Isotropic stress.** Servo-control the four walls (PFC: v = λ L (σ_target − σ)/(k_n N_c Δt)) until every
+//!    wall stress is within `stress_tolerance` of `isotropic_stress` (measured from the wall forces), checked
+//!    every 100 steps, or `max_servo_steps` pass (then [`Packing::converged`] is false). The walls then stop.
+//!    (Measured: relaxing further with local damping only, the frictionless assembly at a low isotropic
+//!    stress, σ/k_n ≈ 1e-5, unjams and its walls unload; so the calmed state is bonded as it is, as PFC does.)
+//! 5. **Bond** (optional, the caller's choice of point or parallel bonds): every pair whose gap is below
+//!    `bond_gap`, then the walls stop.
+//!
+//! Determinism: the only randomness is one `ChaCha8Rng` seeded from `seed`, drawn in a fixed order; the
+//! world's step is bitwise deterministic, so a seed gives a bitwise-identical packing on any machine and any
+//! number of threads.
+//!
+//! Units: consistent (cgs in the scenes: cm, g/cm² areal density, dyne/cm stress per unit thickness).
+use lbdem_kernels::dem::assembly::ContactModel;
+use lbdem_kernels::dem::shape::{Particle, Shape};
+use lbdem_kernels::Real;
+use rand::{RngExt, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+
+use super::world::{BondSpec, DemWorld, PlatenControl, SampleBox};
+use crate::error::{LbdemError, Result};
+
+/// Random positions tried per particle before the fill gives up.
+pub const PLACEMENT_ATTEMPTS: usize = 20_000;
+/// Area fraction of the shrunk particles during the fill.
+pub const FILL_FRACTION: f64 = 0.3;
+
+/// Steps between "calm" operations while packing (PFC: zero every velocity so that particles flung off by
+/// the growth do not rattle as a gas; local damping acts only on accelerating motion).
+pub const CALM_INTERVAL: u64 = 20;
+
+fn calm<T: Real>(world: &mut DemWorld<T>) {
+    for p in world.particles.iter_mut() {
+        p.velocity = [T::zero(); 2];
+        p.angular_velocity = T::zero();
+        p.acceleration = [T::zero(); 2];
+        p.angular_acceleration = T::zero();
+    }
+}
+
+/// What to pack.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PackingSpec<T> {
+    /// Box width W (x).
+    pub width: T,
+    /// Box height H (y).
+    pub height: T,
+    /// Smallest semi-major axis (radius of a disc).
+    pub radius_min: T,
+    /// Largest semi-major axis.
+    pub radius_max: T,
+    /// b/a in (0, 1]; 1 gives discs.
+    pub aspect_ratio: T,
+    /// Target Σ particle area / (W H), which sets the particle count.
+    pub solid_fraction: T,
+    /// Areal density (mass per area, unit thickness).
+    pub density: T,
+    /// RNG seed.
+    pub seed: u64,
+    /// Contact material used while packing (and kept by the world).
+    pub contact: ContactModel<T>,
+    /// Time step.
+    pub timestep: T,
+    /// Steps over which the sizes grow to full size.
+    pub growth_steps: u64,
+    /// Isotropic stress to install (compression positive).
+    pub isotropic_stress: T,
+    /// Relative tolerance on each wall stress.
+    pub stress_tolerance: T,
+    /// Step limit of the servo stage.
+    pub max_servo_steps: u64,
+    /// Pairs closer than this are bonded.
+    pub bond_gap: T,
+}
+
+impl PackingSpec<f64> {
+    /// The dissertation's ch. 6.6 grains (radius 0.07–0.11 cm, density 2.65 g/cm³ × 1 cm) in a W × H box, with
+    /// table 6.1's contact stiffness k_n = 1e5 dyne/cm and friction 0.5 (k_s = k_n here: table 6.1's
+    /// k_s = 6e5 > k_n is kept out of the default), an isotropic stress of 5 dyne/cm, and a step of 0.5 × the
+    /// critical step of a coordination-6 disc (≈ 5e-5 s).
+    pub fn dissertation(width: f64, height: f64, aspect_ratio: f64, seed: u64) -> Self {
+        PackingSpec {
+            width,
+            height,
+            radius_min: 0.07,
+            radius_max: 0.11,
+            aspect_ratio,
+            solid_fraction: 0.82,
+            density: 2.65,
+            seed,
+            contact: ContactModel {
+                normal_stiffness: 1e5,
+                shear_stiffness: 1e5,
+                friction: 0.5,
+                restitution: 1.0,
+                no_tension: true,
+            },
+            timestep: 5e-5,
+            growth_steps: 2000,
+            isotropic_stress: 5.0,
+            stress_tolerance: 0.05,
+            max_servo_steps: 20_000,
+            bond_gap: 1e-3,
+        }
+    }
+}
+
+/// A generated sample.
+#[derive(Clone, Debug)]
+pub struct Packing<T> {
+    /// The world: particles, the four servo walls (stopped), bonds.
+    pub world: DemWorld<T>,
+    /// The walls.
+    pub sample_box: SampleBox,
+    /// Whether the isotropic stress was reached within the tolerance.
+    pub converged: bool,
+    /// Steps used (growth + servo).
+    pub steps: u64,
+    /// Mean unbalanced force / mean contact force at the end (the calmed state is not in full static
+    /// equilibrium: measured ≈ 0.3 for 250 discs; the bonded sample settles before loading).
+    pub unbalanced_force_ratio: T,
+    /// Final size factor f ≤ 1: every semi-axis is f × its drawn value (growth stops at the isotropic stress).
+    pub size_factor: T,
+    /// Wall stresses at the end (left, right, bottom, top).
+    pub wall_stresses: [T; 4],
+}
+
+fn check_spec<T: Real>(s: &PackingSpec<T>) -> Result<()> {
+    let pos = |field: &str, v: T| -> Result<()> {
+        if v.is_finite() && v > T::zero() {
+            Ok(())
+        } else {
+            Err(LbdemError::field(
+                field,
+                v.to_f64_exact(),
+                "must be a finite number > 0",
+                "see docs of lbdem::solid::packing::PackingSpec",
+            ))
+        }
+    };
+    pos("packing.width", s.width)?;
+    pos("packing.height", s.height)?;
+    pos("packing.radius_min", s.radius_min)?;
+    pos("packing.radius_max", s.radius_max)?;
+    pos("packing.density", s.density)?;
+    pos("packing.isotropic_stress", s.isotropic_stress)?;
+    pos("packing.stress_tolerance", s.stress_tolerance)?;
+    if s.radius_max < s.radius_min {
+        return Err(LbdemError::field(
+            "packing.radius_max",
+            s.radius_max.to_f64_exact(),
+            "is smaller than packing.radius_min",
+            "give radius_min <= radius_max",
+        ));
+    }
+    if !(s.aspect_ratio > T::zero() && s.aspect_ratio <= T::one()) {
+        return Err(LbdemError::field(
+            "packing.aspect_ratio",
+            s.aspect_ratio.to_f64_exact(),
+            "must be in (0, 1] (b/a; 1 = discs)",
+            "e.g. 0.5 for the dissertation's ellipses",
+        ));
+    }
+    if !(s.solid_fraction > T::lit(FILL_FRACTION) && s.solid_fraction < T::lit(0.95)) {
+        return Err(LbdemError::field(
+            "packing.solid_fraction",
+            s.solid_fraction.to_f64_exact(),
+            "must be in (0.3, 0.95)",
+            "dense 2-D packings reach 0.80-0.86",
+        ));
+    }
+    if s.width < T::lit(4.0) * s.radius_max || s.height < T::lit(4.0) * s.radius_max {
+        return Err(LbdemError::field(
+            "packing.width",
+            s.width.to_f64_exact(),
+            "the box must be at least 4 largest radii wide and high",
+            "enlarge the box or use smaller particles",
+        ));
+    }
+    Ok(())
+}
+
+/// Draw the sizes and fill the box (steps 1–2). Returns full-size particles at their fill positions and the
+/// shrink factor s.
+pub fn fill_box<T: Real>(spec: &PackingSpec<T>) -> Result<(Vec<Particle<T>>, T)> {
+    check_spec(spec)?;
+    let mut rng = ChaCha8Rng::seed_from_u64(spec.seed);
+    let target = spec.solid_fraction * spec.width * spec.height;
+    let mut area = T::zero();
+    let mut sizes: Vec<(T, T, T)> = Vec::new();
+    while area < target {
+        let u: f64 = rng.random();
+        let a = spec.radius_min + (spec.radius_max - spec.radius_min) * T::lit(u);
+        let b = a * spec.aspect_ratio;
+        let angle = if spec.aspect_ratio < T::one() {
+            let v: f64 = rng.random();
+            T::lit(v * std::f64::consts::PI)
+        } else {
+            T::zero()
+        };
+        area += T::PI() * a * b;
+        sizes.push((a, b, angle));
+    }
+    let s = (T::lit(FILL_FRACTION) / spec.solid_fraction).sqrt();
+    let cell = T::lit(2.0) * spec.radius_max * s;
+    let nx = (spec.width / cell).ceil().to_usize().unwrap_or(1).max(1);
+    let ny = (spec.height / cell).ceil().to_usize().unwrap_or(1).max(1);
+    let mut cells: Vec<Vec<usize>> = vec![Vec::new(); nx * ny];
+    let mut placed: Vec<([T; 2], T)> = Vec::with_capacity(sizes.len());
+    let mut particles = Vec::with_capacity(sizes.len());
+    for &(a, b, angle) in &sizes {
+        let r = a * s;
+        let mut ok = None;
+        for _ in 0..PLACEMENT_ATTEMPTS {
+            let (u, v): (f64, f64) = (rng.random(), rng.random());
+            let x = r + (spec.width - T::lit(2.0) * r) * T::lit(u);
+            let y = r + (spec.height - T::lit(2.0) * r) * T::lit(v);
+            let cx = (x / cell).floor().to_usize().unwrap_or(0).min(nx - 1);
+            let cy = (y / cell).floor().to_usize().unwrap_or(0).min(ny - 1);
+            let mut free = true;
+            'search: for gy in cy.saturating_sub(1)..=(cy + 1).min(ny - 1) {
+                for gx in cx.saturating_sub(1)..=(cx + 1).min(nx - 1) {
+                    for &k in &cells[gx + nx * gy] {
+                        let (p, rk) = placed[k];
+                        let (dx, dy) = (p[0] - x, p[1] - y);
+                        if dx * dx + dy * dy < (r + rk) * (r + rk) {
+                            free = false;
+                            break 'search;
+                        }
+                    }
+                }
+            }
+            if free {
+                ok = Some(([x, y], cx + nx * cy));
+                break;
+            }
+        }
+        let Some((pos, c)) = ok else {
+            return Err(LbdemError::field(
+                "packing.solid_fraction",
+                spec.solid_fraction.to_f64_exact(),
+                &format!(
+                    "could not place particle {} of {} in the box",
+                    placed.len() + 1,
+                    sizes.len()
+                ),
+                "lower the solid fraction or enlarge the box relative to the particles",
+            ));
+        };
+        cells[c].push(placed.len());
+        placed.push((pos, r));
+        let shape = if spec.aspect_ratio < T::one() {
+            Shape::Ellipse {
+                semi_major: a,
+                semi_minor: b,
+            }
+        } else {
+            Shape::Disc { radius: a }
+        };
+        particles.push(Particle::new(pos, angle, shape, spec.density));
+    }
+    Ok((particles, s))
+}
+
+fn scaled<T: Real>(shape: Shape<T>, f: T) -> Shape<T> {
+    match shape {
+        Shape::Disc { radius } => Shape::Disc { radius: radius * f },
+        Shape::Ellipse {
+            semi_major,
+            semi_minor,
+        } => Shape::Ellipse {
+            semi_major: semi_major * f,
+            semi_minor: semi_minor * f,
+        },
+    }
+}
+
+/// The whole procedure (steps 1–5): a packed sample at the isotropic stress, bonded with `bonds` if given.
+pub fn generate_packing<T: Real>(
+    spec: &PackingSpec<T>,
+    bonds: Option<BondSpec<T>>,
+) -> Result<Packing<T>> {
+    let (full, s) = fill_box(spec)?;
+    let shapes: Vec<Shape<T>> = full.iter().map(|p| p.shape).collect();
+    // Frictionless while packing (P&C 2004 material genesis), so the assembly densifies; μ is restored below.
+    let packing_contact = ContactModel {
+        friction: T::zero(),
+        ..spec.contact
+    };
+    let mut world = DemWorld::new(full, packing_contact, spec.timestep)?;
+    let sample_box = world.add_box(
+        [T::zero(); 2],
+        [spec.width, spec.height],
+        PlatenControl::Speed(T::zero()),
+    );
+    // Grow until the mean wall stress reaches the target (or full size); the rate slows as the stress
+    // approaches it, Δf = (1 − s)/growth_steps × max(1 − σ_min/σ_target, 1e-3) with σ_min the least wall stress (all four walls loaded: a jammed, percolating assembly, not a few particles grown into a wall), so the jamming point is not
+    // overshot (stored energy would later be released as a rattling gas).
+    let growth = spec.growth_steps.max(1);
+    let base_rate = (T::one() - s) / T::lit(growth as f64);
+    let mut f = s;
+    let mut grown = 0u64;
+    let mean_stress = |w: &DemWorld<T>| -> T {
+        w.platens
+            .iter()
+            .fold(T::infinity(), |a, p| a.min(p.stress()))
+    };
+    while f < T::one() && grown < 20 * growth {
+        let sigma = mean_stress(&world);
+        if sigma >= spec.isotropic_stress {
+            break;
+        }
+        let slow = (T::one() - sigma / spec.isotropic_stress).max(T::lit(1e-3));
+        f = (f + base_rate * slow).min(T::one());
+        for (p, &shape) in world.particles.iter_mut().zip(&shapes) {
+            p.shape = scaled(shape, f);
+        }
+        world.step();
+        grown += 1;
+        if grown.is_multiple_of(CALM_INTERVAL) {
+            calm(&mut world);
+        }
+    }
+    let r_min = spec.radius_min * spec.aspect_ratio;
+    let servo = PlatenControl::Servo {
+        target_stress: spec.isotropic_stress,
+        relaxation: T::lit(0.5),
+        max_speed: T::lit(2e-3) * r_min / spec.timestep,
+    };
+    for pl in world.platens.iter_mut() {
+        pl.control = servo;
+    }
+    let stresses = |w: &DemWorld<T>| -> [T; 4] {
+        [
+            w.platens[sample_box.left].stress(),
+            w.platens[sample_box.right].stress(),
+            w.platens[sample_box.bottom].stress(),
+            w.platens[sample_box.top].stress(),
+        ]
+    };
+    let within = |w: &DemWorld<T>| {
+        stresses(w).iter().all(|&x| {
+            (x - spec.isotropic_stress).abs() <= spec.stress_tolerance * spec.isotropic_stress
+        })
+    };
+    // Servo with calm (quasi-static descent) until the wall stresses are within the tolerance.
+    let mut converged = false;
+    let mut servo_steps = 0;
+    while servo_steps < spec.max_servo_steps {
+        for k in 1..=100 {
+            world.step();
+            if k.is_multiple_of(CALM_INTERVAL) {
+                calm(&mut world);
+            }
+        }
+        servo_steps += 100;
+        if within(&world) && servo_steps >= 1000 {
+            converged = true;
+            break;
+        }
+    }
+    for pl in world.platens.iter_mut() {
+        pl.control = PlatenControl::Speed(T::zero());
+        pl.speed = T::zero();
+    }
+    world.model = spec.contact;
+    calm(&mut world);
+    if let Some(b) = bonds {
+        world.bond_touching_pairs(b, spec.bond_gap)?;
+    }
+    let wall_stresses = stresses(&world);
+    let unbalanced_force_ratio = world.unbalanced_force_ratio();
+    Ok(Packing {
+        world,
+        sample_box,
+        converged,
+        steps: grown + servo_steps,
+        size_factor: f,
+        unbalanced_force_ratio,
+        wall_stresses,
+    })
+}
+
+/// A hexagonal packing of `columns` × `rows` particles (benchmarks, snapshots): discs of radius
+/// r (1 − `jitter` u), u uniform in [0, 1) from `seed`, on a triangular lattice of spacing 2r; with
+/// `aspect_ratio` < 1 the lattice and the particles are squeezed along y (ellipses of semi-axes (r, (b/a) r),
+/// aligned with x, still touching: an affine map keeps tangency). The lower-left particle is centred at (r, r).
+pub fn hexagonal_packing<T: Real>(
+    columns: usize,
+    rows: usize,
+    radius: T,
+    aspect_ratio: T,
+    jitter: T,
+    density: T,
+    seed: u64,
+) -> Vec<Particle<T>> {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let dy = radius * T::lit(3f64.sqrt()) * aspect_ratio;
+    let mut out = Vec::with_capacity(columns * rows);
+    for row in 0..rows {
+        let shift = if row % 2 == 1 { radius } else { T::zero() };
+        for col in 0..columns {
+            let u: f64 = rng.random();
+            let a = radius * (T::one() - jitter * T::lit(u));
+            let pos = [
+                radius + shift + T::lit(2.0 * col as f64) * radius,
+                radius * aspect_ratio + T::lit(row as f64) * dy,
+            ];
+            out.push(if aspect_ratio < T::one() {
+                Particle::ellipse(pos, T::zero(), a, a * aspect_ratio, density)
+            } else {
+                Particle::disc(pos, a, density)
+            });
+        }
+    }
+    out
+}
+
+/// Put given particles in a box of four fixed platens touching their bounding box, and bond every pair
+/// closer than `bond_gap` (when `bonds` is given). For regular packings ([`hexagonal_packing`]).
+pub fn boxed_sample<T: Real>(
+    particles: Vec<Particle<T>>,
+    contact: ContactModel<T>,
+    timestep: T,
+    bonds: Option<BondSpec<T>>,
+    bond_gap: T,
+) -> Result<Packing<T>> {
+    let mut world = DemWorld::new(particles, contact, timestep)?;
+    let (lo, hi) = world.bounds();
+    let sample_box = world.add_box(lo, hi, PlatenControl::Speed(T::zero()));
+    if let Some(b) = bonds {
+        world.bond_touching_pairs(b, bond_gap)?;
+    }
+    Ok(Packing {
+        world,
+        sample_box,
+        converged: true,
+        steps: 0,
+        unbalanced_force_ratio: T::zero(),
+        size_factor: T::one(),
+        wall_stresses: [T::zero(); 4],
+    })
+}
