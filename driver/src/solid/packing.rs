@@ -368,7 +368,7 @@ pub fn generate_packing<T: Real>(
     let mut converged = false;
     let mut servo_steps = 0;
     while servo_steps < spec.max_servo_steps {
-        for k in 1..=100 {
+        for k in 1..=100u64 {
             world.step();
             if k.is_multiple_of(CALM_INTERVAL) {
                 calm(&mut world);
