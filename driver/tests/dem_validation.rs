@@ -1,0 +1,291 @@
+//! Validation of the dry bonded-particle model orchestrated by `lbdem::solid` (issue 3): scaling of the
+//! elastic modulus with the contact/bond stiffness, of the uniaxial strength with the bond strength, and the
+//! rise of the failure-envelope slope with friction (REFERENCE §7.4, dissertation ch. 2); determinism; the
+//! critical-step refusal; the VTK writer.
+//!
+//! The sample: ≈ 250 discs (radius 0.07–0.11 cm, ch. 6.6 sizes) packed by the ch. 2 procedure in a 2 × 4 cm
+//! box to the ch. 6.6 hydrostatic stress (50 dyne/cm), k_n = k_s = 1e5 dyne/cm, parallel bonds with
+//! λ̄ = 1, k̄_n = k̄_s = 2.8e5 dyne/cm³ (Ē_c ≈ E_c = k_n/2 with eq. 2.2 for R_A + R_B ≈ 0.18 cm),
+//! σ̄_c = τ̄_c = 500 dyne/cm², local damping 0.7, platens at 0.02 cm/s each (axial strain rate 0.01/s; halving it
+//! changed the peak by 1.3 %, measured). One packing (seed 1) is shared by every test.
+//!
+//! Measured (this machine, f64): E = 9.07e4 dyne/cm² at σ̄_c = 500; UCS 741.7 → 1505.8 dyne/cm² when σ̄_c, τ̄_c
+//! double (×2.03); E ×1.95 when every stiffness doubles; envelope slopes dσ₁/dσ₃ = 1.50 (μ = 0.1) and 3.47
+//! (μ = 1.0) between σ₃ = 25 and 150 dyne/cm.
+use std::sync::OnceLock;
+
+use lbdem::solid::vtk::{parse_particles_vtk, particles_vtk};
+use lbdem::solid::*;
+use lbdem_kernels::dem::assembly::ContactModel;
+use lbdem_kernels::dem::bond::BreakMode;
+
+const BOND_STIFFNESS: f64 = 2.8e5;
+const BOND_STRENGTH: f64 = 500.0;
+const PLATEN_SPEED: f64 = 0.02;
+
+fn packing() -> &'static Packing<f64> {
+    static PACKING: OnceLock<Packing<f64>> = OnceLock::new();
+    PACKING.get_or_init(|| {
+        let spec = PackingSpec::dissertation(2.0, 4.0, 1.0, 1);
+        let p = generate_packing(&spec, None).expect("packing");
+        assert!(
+            p.converged,
+            "isotropic stress not reached: {:?}",
+            p.wall_stresses
+        );
+        p
+    })
+}
+
+fn parallel_bonds(stiffness: f64, strength: f64) -> BondSpec<f64> {
+    BondSpec::Parallel {
+        radius_multiplier: 1.0,
+        normal_stiffness: stiffness,
+        shear_stiffness: stiffness,
+        tensile_strength: strength,
+        shear_strength: strength,
+    }
+}
+
+/// Bond the shared packing with the given stiffness multiplier (contacts and bonds), bond strength and
+/// friction, then load it.
+fn compression(
+    stiffness_factor: f64,
+    strength: f64,
+    friction: f64,
+    confining_stress: f64,
+    max_strain: f64,
+) -> (CompressionResult, Packing<f64>) {
+    let mut p = packing().clone();
+    p.world.model.normal_stiffness *= stiffness_factor;
+    p.world.model.shear_stiffness *= stiffness_factor;
+    p.world.model.friction = friction;
+    p.world
+        .bond_touching_pairs(
+            parallel_bonds(BOND_STIFFNESS * stiffness_factor, strength),
+            1e-3,
+        )
+        .expect("bonding keeps the step below critical");
+    let test = CompressionTest {
+        confining_stress,
+        platen_speed: PLATEN_SPEED,
+        settle_steps: 1000,
+        max_strain,
+        post_peak_fraction: 0.7,
+        record_interval: 50,
+    };
+    let r = run_compression(&mut p, &test, |_, _| {});
+    (r, p)
+}
+
+#[test]
+fn youngs_modulus_doubles_with_contact_and_bond_stiffness() {
+    // Unbreakable bonds, elastic range only (axial strain ≤ 0.2 %).
+    let (soft, _) = compression(1.0, 1e12, 0.5, 0.0, 2e-3);
+    let (stiff, _) = compression(2.0, 1e12, 0.5, 0.0, 2e-3);
+    let ratio = stiff.youngs_modulus / soft.youngs_modulus;
+    println!(
+        "E = {:.4e} -> {:.4e} dyne/cm^2, ratio {ratio:.4}",
+        soft.youngs_modulus, stiff.youngs_modulus
+    );
+    // 5 %: the quasi-static bonded model is linear in the stiffnesses (E ∝ E_c, REFERENCE §7.4), but the
+    // installed isotropic stress (fixed contact overlaps) becomes a doubled pre-stress, and at the same platen
+    // speed the stiffer sample is loaded relatively faster (its wave crossing time falls by √2).
+    assert!((ratio - 2.0).abs() < 0.1, "E ratio {ratio}");
+}
+
+#[test]
+fn uniaxial_strength_doubles_with_bond_strength_and_bonds_break() {
+    let (weak, sample) = compression(1.0, BOND_STRENGTH, 0.5, 0.0, 0.05);
+    let (strong, _) = compression(1.0, 2.0 * BOND_STRENGTH, 0.5, 0.0, 0.05);
+    let ratio = strong.peak_stress / weak.peak_stress;
+    println!(
+        "UCS = {:.2} -> {:.2} dyne/cm^2 (ratio {ratio:.4}); E = {:.4e}; peak strain {:.4e}; UCS/sigma_c = {:.3}",
+        weak.peak_stress,
+        strong.peak_stress,
+        weak.youngs_modulus,
+        weak.peak_strain,
+        weak.peak_stress / BOND_STRENGTH
+    );
+    // 5 %: UCS ∝ σ̄_c at fixed packing and τ̄_c/σ̄_c when E_c/σ̄_c ≫ 1 (REFERENCE §7.4); here E_c/σ̄_c = 100, the
+    // installed hydrostatic stress (50 dyne/cm, ≈ 7 % of the UCS) does not scale with the bond strength, and
+    // failure strains of 0.8–1.8 % add geometric non-linearity.
+    assert!((ratio - 2.0).abs() < 0.1, "UCS ratio {ratio}");
+    // The test ran past the peak (the stress fell to 70 % of it) and bonds broke, each recorded.
+    let last = weak.curve.last().expect("curve");
+    assert!(last.axial_strain > weak.peak_strain);
+    let breaks = &sample.world.breaks;
+    assert!(!breaks.is_empty());
+    assert_eq!(
+        breaks.len(),
+        sample.world.bonds.len() - sample.world.intact_bonds()
+    );
+    assert!(breaks.windows(2).all(|w| w[0].step <= w[1].step));
+    for b in breaks {
+        let [i, j] = b.pair;
+        assert!(i < j && j < sample.world.particles.len());
+        assert!(b.orientation.is_finite() && b.position.iter().all(|x| x.is_finite()));
+        assert!(matches!(b.mode, BreakMode::Tension | BreakMode::Shear));
+    }
+}
+
+#[test]
+fn failure_envelope_slope_rises_with_friction() {
+    let confinements = [25.0, 150.0];
+    let slope = |friction: f64| {
+        let peaks: Vec<f64> = confinements
+            .iter()
+            .map(|&c| {
+                compression(1.0, BOND_STRENGTH, friction, c, 0.05)
+                    .0
+                    .peak_stress
+            })
+            .collect();
+        println!("friction {friction}: peak axial stress {peaks:?} at confining {confinements:?}");
+        (peaks[1] - peaks[0]) / (confinements[1] - confinements[0])
+    };
+    let (low, high) = (slope(0.1), slope(1.0));
+    println!("envelope slope d(sigma_1)/d(sigma_3): {low:.3} (mu = 0.1), {high:.3} (mu = 1.0)");
+    // Qualitative (dissertation ch. 2: friction raises the slope of the compressive failure envelope);
+    // measured 1.50 and 3.47. Both must rise with confinement, and the high-friction slope by at least 50 %
+    // more, far beyond the run-to-run change from the loading rate (1.3 % of the peak).
+    assert!(low > 0.0 && high > 1.5 * low, "slopes {low} {high}");
+}
+
+#[test]
+fn packing_is_bitwise_deterministic_for_a_seed() {
+    let spec = |seed| {
+        let mut s = PackingSpec::dissertation(1.2, 1.2, 0.5, seed);
+        s.max_servo_steps = 3000;
+        s
+    };
+    let bonds = Some(BondSpec::Point {
+        stiffness: 1e5,
+        strength: 700.0,
+    });
+    let a = generate_packing(&spec(7), bonds).unwrap();
+    let b = generate_packing(&spec(7), bonds).unwrap();
+    let c = generate_packing(&spec(8), bonds).unwrap();
+    assert!(a.world.particles.len() > 20);
+    assert_eq!(a.world.particles, b.world.particles);
+    assert_eq!(a.world.bonds, b.world.bonds);
+    assert_ne!(a.world.particles, c.world.particles);
+    // Ellipses of aspect 0.5 with orientations in [0, π).
+    assert!(a.world.particles.iter().any(|p| p.angle > 1.0));
+}
+
+fn bonded_hexagonal_block() -> Packing<f64> {
+    let particles = hexagonal_packing(30, 30, 0.09, 1.0, 0.02, 2.65, 3);
+    let model = ContactModel {
+        normal_stiffness: 1e5,
+        shear_stiffness: 1e5,
+        friction: 0.5,
+        restitution: 1.0,
+        no_tension: true,
+    };
+    boxed_sample(
+        particles,
+        model,
+        5e-5,
+        Some(parallel_bonds(BOND_STIFFNESS, BOND_STRENGTH)),
+        0.005,
+    )
+    .unwrap()
+}
+
+#[test]
+fn step_is_bitwise_identical_for_one_and_two_threads() {
+    let run = |threads: usize| {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        pool.install(|| {
+            let mut p = bonded_hexagonal_block();
+            let b = p.sample_box;
+            p.world.platens[b.top].control = PlatenControl::Speed(0.5);
+            p.world.platens[b.left].control = PlatenControl::Servo {
+                target_stress: 10.0,
+                relaxation: 0.5,
+                max_speed: 0.1,
+            };
+            for _ in 0..300 {
+                p.world.step();
+            }
+            p.world
+        })
+    };
+    let (one, two) = (run(1), run(2));
+    // More than two rayon chunks of 512 pairs/bonds/particles: the parallel passes really split.
+    assert!(
+        one.candidate_pair_list().len() > 1024,
+        "too few pairs to split"
+    );
+    assert!(one.bonds.len() > 1024 && one.particles.len() > 512);
+    assert_eq!(one.particles, two.particles);
+    assert_eq!(one.bonds, two.bonds);
+    assert_eq!(one.breaks, two.breaks);
+    assert_eq!(one.platens, two.platens);
+}
+
+#[test]
+fn step_above_critical_is_refused_naming_the_field() {
+    let particles = hexagonal_packing(4, 4, 0.09, 1.0, 0.0, 2.65, 1);
+    let model = ContactModel {
+        normal_stiffness: 1e5,
+        shear_stiffness: 1e5,
+        friction: 0.5,
+        restitution: 1.0,
+        no_tension: true,
+    };
+    let world = DemWorld::new(particles.clone(), model, 1e-5).unwrap();
+    let critical = world.critical_time_step();
+    // Disc r = 0.09, density 2.65: m = 0.0674 g; rotation governs: √(I/(6 k_s r²)) = √(m/12e5) = 2.37e-4 s.
+    assert!(
+        (critical - (0.5 * 2.65 * std::f64::consts::PI * 0.0081 / 6e5f64).sqrt()).abs() < 1e-12
+    );
+    let err = DemWorld::new(particles, model, critical)
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("solid.timestep"), "{err}");
+    assert!(err.contains("critical"), "{err}");
+    // Bonding stiffens the assembly: the critical step falls.
+    let mut p = bonded_hexagonal_block();
+    let before = p.world.critical_time_step();
+    p.world.bonds.clear();
+    assert!(p.world.critical_time_step() > before);
+}
+
+#[test]
+fn vtk_output_parses_back_with_the_right_counts() {
+    let mut p = bonded_hexagonal_block();
+    // Break a few bonds by hand so that the fraction is not all zero.
+    for b in p.world.bonds.iter_mut().take(10) {
+        if let BondLaw::Parallel { bond, .. } = &mut b.law {
+            bond.intact = false;
+        }
+    }
+    let fractions = p.world.broken_bond_fraction();
+    let text = particles_vtk("bonded block", &p.world.particles, &fractions);
+    let parsed = parse_particles_vtk(&text).expect("parses");
+    let n = p.world.particles.len();
+    assert_eq!(parsed.points.len(), n);
+    assert_eq!(parsed.vertices, (0..n).collect::<Vec<_>>());
+    let names: Vec<&str> = parsed.arrays.iter().map(|a| a.0.as_str()).collect();
+    assert_eq!(
+        names,
+        [
+            "orientation",
+            "semi_axes",
+            "velocity",
+            "angular_velocity",
+            "broken_bond_fraction"
+        ]
+    );
+    for (name, comps, values) in &parsed.arrays {
+        assert_eq!(values.len(), n * comps, "{name}");
+    }
+    let broken = &parsed.arrays[4].2;
+    assert!(broken.iter().any(|&f| f > 0.0));
+    assert!((parsed.points[5][0] - p.world.particles[5].position[0]).abs() < 1e-8);
+}
