@@ -21,9 +21,13 @@ pub struct RunOptions {
 
 /// Validate a scene and print its derived parameters without running it.
 pub fn check(scene_path: &Path) -> Result<String> {
+    if let Some(dry) = crate::solid::scene::DryScene::load_if_dry(scene_path)? {
+        return dry.check(scene_path);
+    }
     let scene = Scene::load(scene_path)?;
     let labels = scene.scene.units.labels();
     match scene.scene.kind {
+        SceneKind::Dry => crate::solid::scene::check_file(scene_path),
         SceneKind::Channel => {
             let setup = ChannelSetup::new(&scene)?;
             let mut s = format!("scene {} is valid (kind = channel)\n", scene_path.display());
@@ -38,9 +42,13 @@ pub fn check(scene_path: &Path) -> Result<String> {
 
 /// Run a scene, writing outputs into `out`. Returns the summary as JSON.
 pub fn run(scene_path: &Path, out: &Path, opts: &RunOptions) -> Result<serde_json::Value> {
+    if let Some(dry) = crate::solid::scene::DryScene::load_if_dry(scene_path)? {
+        return dry.run(scene_path, out, opts.overwrite);
+    }
     let scene = Scene::load(scene_path)?;
     let labels = scene.scene.units.labels();
     match scene.scene.kind {
+        SceneKind::Dry => crate::solid::scene::run_file(scene_path, out, opts.overwrite),
         SceneKind::Channel => {
             let setup = ChannelSetup::new(&scene)?;
             prepare_dir(out, opts.overwrite)?;

@@ -93,6 +93,8 @@ pub enum Precision {
 pub enum SceneKind {
     /// Plane Poiseuille flow between two walls (validation of the fluid kernels).
     Channel,
+    /// A bonded dry sample between platens (no fluid); read by [`crate::solid::scene::DryScene`].
+    Dry,
 }
 
 /// `[scene]`
@@ -310,6 +312,7 @@ impl Scene {
             ));
         }
         match self.scene.kind {
+            SceneKind::Dry => {} // validated by crate::solid::scene::DryScene
             SceneKind::Channel => {
                 let c = self.channel.as_ref().ok_or_else(|| {
                     LbdemError::field(

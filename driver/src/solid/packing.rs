@@ -159,7 +159,8 @@ pub struct Packing<T> {
     pub wall_stresses: [T; 4],
 }
 
-fn check_spec<T: Real>(s: &PackingSpec<T>) -> Result<()> {
+/// The range checks of a [`PackingSpec`], naming the `packing.*` field.
+pub fn fill_box_spec_check<T: Real>(s: &PackingSpec<T>) -> Result<()> {
     let pos = |field: &str, v: T| -> Result<()> {
         if v.is_finite() && v > T::zero() {
             Ok(())
@@ -217,7 +218,7 @@ fn check_spec<T: Real>(s: &PackingSpec<T>) -> Result<()> {
 /// Draw the sizes and fill the box (steps 1–2). Returns full-size particles at their fill positions and the
 /// shrink factor s.
 pub fn fill_box<T: Real>(spec: &PackingSpec<T>) -> Result<(Vec<Particle<T>>, T)> {
-    check_spec(spec)?;
+    fill_box_spec_check(spec)?;
     let mut rng = ChaCha8Rng::seed_from_u64(spec.seed);
     let target = spec.solid_fraction * spec.width * spec.height;
     let mut area = T::zero();

@@ -1,1 +1,704 @@
-//! placeholder
+//! The `kind = "dry"` scene: a bonded sample packed by the ch. 2 procedure and loaded between platens
+//! (uniaxial or servo-confined biaxial compression at a constant platen speed), with no fluid (no lattice is
+//! allocated). Outputs: `stress_strain.csv`, `broken_bonds.csv`, `particles_NNNN.vtk` (legacy VTK), and
+//! `summary.json` (written last).
+//!
+//! ```toml
+//! [scene]
+//! kind = "dry"
+//! units = "cgs"            # every value below in cm, g, s, dyne (2-D: stresses in dyne/cm per unit thickness)
+//! [packing]
+//! width = 2.0              # box, cm
+//! height = 4.0
+//! radius_min = 0.07        # semi-major axes, cm (dissertation ch. 6.6)
+//! radius_max = 0.11
+//! aspect_ratio = 1.0       # b/a; 0.5 for the ch. 6.6 ellipses
+//! solid_fraction = 0.82    # sets the particle count
+//! density = 2.65           # g/cm^3 (unit thickness)
+//! seed = 1
+//! isotropic_stress = 50.0  # installed before bonding
+//! [solid]
+//! normal_stiffness = 1e5   # dyne/cm (table 6.1)
+//! shear_stiffness = 1e5
+//! friction = 0.5
+//! local_damping = 0.7
+//! timestep = 5e-5          # s; refused above 0.8 x the critical step
+//! [solid.bonds]
+//! kind = "parallel"        # or "point" with stiffness (dyne/cm) and strength (dyne)
+//! radius_multiplier = 1.0
+//! normal_stiffness = 2.8e5 # dyne/cm^3
+//! shear_stiffness = 2.8e5
+//! tensile_strength = 500.0 # dyne/cm^2
+//! shear_strength = 500.0
+//! [loading]
+//! confining_stress = 0.0   # 0: uniaxial (lateral platens removed)
+//! platen_speed = 0.02      # cm/s, each axial platen
+//! max_strain = 0.05
+//! ```
+use std::path::Path;
+use std::time::Instant;
+
+use lbdem_kernels::dem::assembly::ContactModel;
+use lbdem_kernels::dem::bond::BreakMode;
+use lbdem_kernels::Real;
+use serde::{Deserialize, Serialize};
+use serde_json::json;
+
+use super::loading::{run_compression, CompressionTest};
+use super::packing::{generate_packing, hexagonal_packing, PackingSpec};
+use super::vtk::particles_vtk;
+use super::world::{BondSpec, DemWorld, CRITICAL_STEP_SAFETY};
+use crate::error::{LbdemError, Result};
+use crate::output::{csv, prepare_dir, write_atomic};
+use crate::scene::{Precision, SceneHeader, SceneKind};
+
+/// `[packing]`: the box, the size distribution and the isotropic stress (see [`PackingSpec`]).
+#[derive(Clone, Debug, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct PackingSection {
+    /// Box width (x).
+    pub width: f64,
+    /// Box height (y).
+    pub height: f64,
+    /// Smallest semi-major axis.
+    pub radius_min: f64,
+    /// Largest semi-major axis.
+    pub radius_max: f64,
+    /// b/a in (0, 1] (default 1: discs).
+    #[serde(default = "one")]
+    pub aspect_ratio: f64,
+    /// Target solid fraction (default 0.82).
+    #[serde(default = "default_solid_fraction")]
+    pub solid_fraction: f64,
+    /// Grain density (mass per volume; unit thickness).
+    pub density: f64,
+    /// RNG seed.
+    pub seed: u64,
+    /// Isotropic stress installed before bonding.
+    pub isotropic_stress: f64,
+    /// Relative tolerance on the wall stresses (default 0.2).
+    #[serde(default = "default_stress_tolerance")]
+    pub stress_tolerance: f64,
+    /// Steps of the size growth (default 2000).
+    #[serde(default = "default_growth_steps")]
+    pub growth_steps: u64,
+    /// Step limit of the stress installation (default 40000).
+    #[serde(default = "default_adjust_steps")]
+    pub max_adjust_steps: u64,
+}
+
+fn one() -> f64 {
+    1.0
+}
+fn default_solid_fraction() -> f64 {
+    0.82
+}
+fn default_stress_tolerance() -> f64 {
+    0.2
+}
+fn default_growth_steps() -> u64 {
+    2000
+}
+fn default_adjust_steps() -> u64 {
+    40_000
+}
+fn default_damping() -> f64 {
+    lbdem_kernels::dem::law::DEFAULT_LOCAL_DAMPING
+}
+fn default_bond_gap() -> f64 {
+    1e-3
+}
+fn default_settle() -> u64 {
+    1000
+}
+fn default_post_peak() -> f64 {
+    0.7
+}
+fn default_record() -> u64 {
+    50
+}
+
+/// `[solid.bonds]`.
+#[derive(Clone, Debug, Deserialize, Serialize)]
+#[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
+pub enum BondsSection {
+    /// Point bonds (eq. 6.13).
+    Point {
+        /// k_b (force/length).
+        stiffness: f64,
+        /// F_crit (force).
+        strength: f64,
+        /// Bond pairs closer than this (default 1e-3).
+        #[serde(default = "default_bond_gap")]
+        gap: f64,
+    },
+    /// Parallel bonds (Potyondy & Cundall 2004).
+    Parallel {
+        /// λ̄ (default 1).
+        #[serde(default = "one")]
+        radius_multiplier: f64,
+        /// k̄_n (stress/length).
+        normal_stiffness: f64,
+        /// k̄_s (stress/length).
+        shear_stiffness: f64,
+        /// σ̄_c (stress).
+        tensile_strength: f64,
+        /// τ̄_c (stress).
+        shear_strength: f64,
+        /// Bond pairs closer than this (default 1e-3).
+        #[serde(default = "default_bond_gap")]
+        gap: f64,
+    },
+}
+
+/// `[solid]`: contact material, damping, time step, bonds.
+#[derive(Clone, Debug, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct SolidSection {
+    /// k_n (force/length).
+    pub normal_stiffness: f64,
+    /// k_s (force/length).
+    pub shear_stiffness: f64,
+    /// μ.
+    pub friction: f64,
+    /// PFC local damping α (default 0.7).
+    #[serde(default = "default_damping")]
+    pub local_damping: f64,
+    /// DEM time step.
+    pub timestep: f64,
+    /// Bonds (none: a cohesionless sample).
+    #[serde(default)]
+    pub bonds: Option<BondsSection>,
+}
+
+/// `[loading]`: the compression test.
+#[derive(Clone, Debug, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct LoadingSection {
+    /// Confining stress (0: uniaxial).
+    #[serde(default)]
+    pub confining_stress: f64,
+    /// Speed of each axial platen.
+    pub platen_speed: f64,
+    /// Steps before loading (default 1000).
+    #[serde(default = "default_settle")]
+    pub settle_steps: u64,
+    /// Stop at this axial strain.
+    pub max_strain: f64,
+    /// Stop when the deviator falls to this fraction of its peak (default 0.7).
+    #[serde(default = "default_post_peak")]
+    pub post_peak_fraction: f64,
+    /// Steps between stress–strain records (default 50).
+    #[serde(default = "default_record")]
+    pub record_interval: u64,
+    /// Records between VTK snapshots (0: only the first and last).
+    #[serde(default)]
+    pub vtk_interval: u64,
+}
+
+/// A whole dry scene file.
+#[derive(Clone, Debug, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct DryScene {
+    /// `[scene]` (kind = "dry").
+    pub scene: SceneHeader,
+    /// `[packing]`.
+    pub packing: PackingSection,
+    /// `[solid]`.
+    pub solid: SolidSection,
+    /// `[loading]`.
+    pub loading: LoadingSection,
+}
+
+/// `lbdem check` of a dry scene file.
+pub fn check_file(path: &Path) -> Result<String> {
+    let p = path.display().to_string();
+    let text = std::fs::read_to_string(path).map_err(|e| LbdemError::ReadScene {
+        path: p.clone(),
+        source: e,
+    })?;
+    DryScene::from_toml(&text, &p)?.check(path)
+}
+
+/// `lbdem run` of a dry scene file.
+pub fn run_file(path: &Path, out: &Path, overwrite: bool) -> Result<serde_json::Value> {
+    let p = path.display().to_string();
+    let text = std::fs::read_to_string(path).map_err(|e| LbdemError::ReadScene {
+        path: p.clone(),
+        source: e,
+    })?;
+    DryScene::from_toml(&text, &p)?.run(path, out, overwrite)
+}
+
+#[derive(Deserialize)]
+struct KindOnly {
+    scene: KindHeader,
+}
+#[derive(Deserialize)]
+struct KindHeader {
+    kind: SceneKind,
+}
+
+fn positive(field: &str, v: f64, hint: &str) -> Result<()> {
+    if v.is_finite() && v > 0.0 {
+        Ok(())
+    } else {
+        Err(LbdemError::field(
+            field,
+            v,
+            "must be a finite number > 0",
+            hint,
+        ))
+    }
+}
+
+fn non_negative(field: &str, v: f64, hint: &str) -> Result<()> {
+    if v.is_finite() && v >= 0.0 {
+        Ok(())
+    } else {
+        Err(LbdemError::field(
+            field,
+            v,
+            "must be a finite number >= 0",
+            hint,
+        ))
+    }
+}
+
+impl DryScene {
+    /// Parse `path` as a dry scene when its `[scene] kind` is "dry"; `None` for any other kind (and for files
+    /// whose header does not parse: the caller's own parser reports those).
+    pub fn load_if_dry(path: &Path) -> Result<Option<Self>> {
+        let p = path.display().to_string();
+        let text = std::fs::read_to_string(path).map_err(|e| LbdemError::ReadScene {
+            path: p.clone(),
+            source: e,
+        })?;
+        match toml::from_str::<KindOnly>(&text) {
+            Ok(k) if k.scene.kind == SceneKind::Dry => Self::from_toml(&text, &p).map(Some),
+            _ => Ok(None),
+        }
+    }
+
+    /// Parse a dry scene from TOML text and check its ranges (`path` only for messages).
+    pub fn from_toml(text: &str, path: &str) -> Result<Self> {
+        let s: DryScene = toml::from_str(text).map_err(|e| LbdemError::ParseScene {
+            path: path.to_string(),
+            message: e.to_string(),
+        })?;
+        s.validate()?;
+        Ok(s)
+    }
+
+    /// Range checks naming the field.
+    pub fn validate(&self) -> Result<()> {
+        let p = &self.packing;
+        positive("packing.width", p.width, "box width along x")?;
+        positive("packing.height", p.height, "box height along y")?;
+        positive("packing.radius_min", p.radius_min, "e.g. 0.07 cm")?;
+        positive("packing.radius_max", p.radius_max, "e.g. 0.11 cm")?;
+        positive("packing.density", p.density, "e.g. 2.65 g/cm^3")?;
+        positive("packing.isotropic_stress", p.isotropic_stress, "e.g. 50")?;
+        positive("packing.stress_tolerance", p.stress_tolerance, "e.g. 0.2")?;
+        let s = &self.solid;
+        positive(
+            "solid.normal_stiffness",
+            s.normal_stiffness,
+            "e.g. 1e5 dyne/cm (table 6.1)",
+        )?;
+        positive(
+            "solid.shear_stiffness",
+            s.shear_stiffness,
+            "e.g. 1e5 dyne/cm",
+        )?;
+        non_negative("solid.friction", s.friction, "e.g. 0.5 (table 6.1)")?;
+        if !(s.local_damping >= 0.0 && s.local_damping < 1.0) {
+            return Err(LbdemError::field(
+                "solid.local_damping",
+                s.local_damping,
+                "must be in [0, 1)",
+                "PFC and the dissertation use 0.7",
+            ));
+        }
+        positive(
+            "solid.timestep",
+            s.timestep,
+            "run `lbdem check` for the critical step",
+        )?;
+        match s.bonds {
+            Some(BondsSection::Point {
+                stiffness,
+                strength,
+                gap,
+            }) => {
+                positive(
+                    "solid.bonds.stiffness",
+                    stiffness,
+                    "e.g. 1e5 dyne/cm (table 6.1)",
+                )?;
+                positive(
+                    "solid.bonds.strength",
+                    strength,
+                    "e.g. 700 dyne (table 6.1)",
+                )?;
+                non_negative("solid.bonds.gap", gap, "e.g. 1e-3 cm")?;
+            }
+            Some(BondsSection::Parallel {
+                radius_multiplier,
+                normal_stiffness,
+                shear_stiffness,
+                tensile_strength,
+                shear_strength,
+                gap,
+            }) => {
+                positive(
+                    "solid.bonds.radius_multiplier",
+                    radius_multiplier,
+                    "usually 1",
+                )?;
+                positive(
+                    "solid.bonds.normal_stiffness",
+                    normal_stiffness,
+                    "k̄_n = Ē_c/(R_A + R_B)",
+                )?;
+                positive(
+                    "solid.bonds.shear_stiffness",
+                    shear_stiffness,
+                    "k̄_s = k̄_n/(k̄_n/k̄_s)",
+                )?;
+                positive("solid.bonds.tensile_strength", tensile_strength, "σ̄_c")?;
+                positive("solid.bonds.shear_strength", shear_strength, "τ̄_c")?;
+                non_negative("solid.bonds.gap", gap, "e.g. 1e-3 cm")?;
+            }
+            None => {}
+        }
+        let l = &self.loading;
+        non_negative(
+            "loading.confining_stress",
+            l.confining_stress,
+            "0 for uniaxial",
+        )?;
+        positive(
+            "loading.platen_speed",
+            l.platen_speed,
+            "slow: quasi-static (REFERENCE §7.4)",
+        )?;
+        positive("loading.max_strain", l.max_strain, "e.g. 0.05")?;
+        if !(l.post_peak_fraction > 0.0 && l.post_peak_fraction < 1.0) {
+            return Err(LbdemError::field(
+                "loading.post_peak_fraction",
+                l.post_peak_fraction,
+                "must be in (0, 1)",
+                "e.g. 0.7",
+            ));
+        }
+        if l.record_interval == 0 {
+            return Err(LbdemError::field(
+                "loading.record_interval",
+                0,
+                "must be at least 1",
+                "e.g. 50",
+            ));
+        }
+        // The packing spec re-checks sizes, aspect ratio and solid fraction with field names.
+        let spec = self.packing_spec::<f64>();
+        super::packing::fill_box_spec_check(&spec)?;
+        Ok(())
+    }
+
+    fn packing_spec<T: Real>(&self) -> PackingSpec<T> {
+        let (p, s) = (&self.packing, &self.solid);
+        PackingSpec {
+            width: T::lit(p.width),
+            height: T::lit(p.height),
+            radius_min: T::lit(p.radius_min),
+            radius_max: T::lit(p.radius_max),
+            aspect_ratio: T::lit(p.aspect_ratio),
+            solid_fraction: T::lit(p.solid_fraction),
+            density: T::lit(p.density),
+            seed: p.seed,
+            contact: ContactModel {
+                normal_stiffness: T::lit(s.normal_stiffness),
+                shear_stiffness: T::lit(s.shear_stiffness),
+                friction: T::lit(s.friction),
+                restitution: T::one(),
+                no_tension: true,
+            },
+            timestep: T::lit(s.timestep),
+            growth_steps: p.growth_steps,
+            isotropic_stress: T::lit(p.isotropic_stress),
+            stress_tolerance: T::lit(p.stress_tolerance),
+            max_servo_steps: p.max_adjust_steps,
+            bond_gap: T::lit(self.bond_gap()),
+        }
+    }
+
+    fn bond_gap(&self) -> f64 {
+        match self.solid.bonds {
+            Some(BondsSection::Point { gap, .. }) | Some(BondsSection::Parallel { gap, .. }) => gap,
+            None => 0.0,
+        }
+    }
+
+    fn bond_spec<T: Real>(&self) -> Option<BondSpec<T>> {
+        match self.solid.bonds {
+            Some(BondsSection::Point {
+                stiffness,
+                strength,
+                ..
+            }) => Some(BondSpec::Point {
+                stiffness: T::lit(stiffness),
+                strength: T::lit(strength),
+            }),
+            Some(BondsSection::Parallel {
+                radius_multiplier,
+                normal_stiffness,
+                shear_stiffness,
+                tensile_strength,
+                shear_strength,
+                ..
+            }) => Some(BondSpec::Parallel {
+                radius_multiplier: T::lit(radius_multiplier),
+                normal_stiffness: T::lit(normal_stiffness),
+                shear_stiffness: T::lit(shear_stiffness),
+                tensile_strength: T::lit(tensile_strength),
+                shear_strength: T::lit(shear_strength),
+            }),
+            None => None,
+        }
+    }
+
+    /// A-priori critical step: a hexagonal block of the smallest particles, fully bonded (six contacts and
+    /// six bonds in its interior), through [`DemWorld::critical_time_step`].
+    pub fn critical_time_step(&self) -> f64 {
+        let p = &self.packing;
+        let particles = hexagonal_packing(3, 3, p.radius_min, p.aspect_ratio, 0.0, p.density, 0);
+        let spec = self.packing_spec::<f64>();
+        let Ok(mut world) = DemWorld::new(particles, spec.contact, f64::MIN_POSITIVE) else {
+            return f64::NAN;
+        };
+        if let Some(b) = self.bond_spec::<f64>() {
+            if world.bond_touching_pairs(b, 1e-9 * p.radius_min).is_err() {
+                return f64::NAN;
+            }
+        }
+        world.critical_time_step()
+    }
+
+    /// `lbdem check`: validate and describe, refusing a step above the critical one.
+    pub fn check(&self, path: &Path) -> Result<String> {
+        let critical = self.critical_time_step();
+        self.check_timestep(critical)?;
+        let mut s = format!("scene {} is valid (kind = dry)\n", path.display());
+        s += &self.describe(critical);
+        Ok(s)
+    }
+
+    fn check_timestep(&self, critical: f64) -> Result<()> {
+        let dt = self.solid.timestep;
+        if dt > CRITICAL_STEP_SAFETY * critical {
+            return Err(LbdemError::field(
+                "solid.timestep",
+                format!("{dt:e}"),
+                &format!(
+                    "exceeds {CRITICAL_STEP_SAFETY} x the DEM critical step {critical:e} (smallest particle, six contacts and six bonds)"
+                ),
+                &format!("use solid.timestep <= {:e}", CRITICAL_STEP_SAFETY * critical),
+            ));
+        }
+        Ok(())
+    }
+
+    fn describe(&self, critical: f64) -> String {
+        let labels = self.scene.units.labels();
+        let p = &self.packing;
+        let mean_area = std::f64::consts::PI
+            * p.aspect_ratio
+            * (p.radius_min * p.radius_min
+                + p.radius_min * p.radius_max
+                + p.radius_max * p.radius_max)
+            / 3.0;
+        format!(
+            "  packing: {} x {} {len} box, about {:.0} particles (solid fraction {}), seed {}, isotropic stress {} {pr}\n  DEM critical step {critical:.4e} {t} (x{CRITICAL_STEP_SAFETY} = {:.4e}); chosen step {:.4e} {t} ({:.2} of critical)\n  loading: {} at platen speed {} {v} each, up to axial strain {}\n",
+            p.width,
+            p.height,
+            p.solid_fraction * p.width * p.height / mean_area,
+            p.solid_fraction,
+            p.seed,
+            p.isotropic_stress,
+            CRITICAL_STEP_SAFETY * critical,
+            self.solid.timestep,
+            self.solid.timestep / critical,
+            if self.loading.confining_stress > 0.0 {
+                format!("biaxial compression, confining stress {}", self.loading.confining_stress)
+            } else {
+                "uniaxial compression".to_string()
+            },
+            self.loading.platen_speed,
+            self.loading.max_strain,
+            len = labels.length,
+            pr = labels.pressure,
+            t = labels.time,
+            v = labels.velocity,
+        )
+    }
+
+    /// `lbdem run`: pack, bond, load, write the outputs into `out`. Returns the summary.
+    pub fn run(&self, path: &Path, out: &Path, overwrite: bool) -> Result<serde_json::Value> {
+        let critical = self.critical_time_step();
+        self.check_timestep(critical)?;
+        prepare_dir(out, overwrite)?;
+        eprintln!("lbdem: dry scene {}", path.display());
+        eprint!("{}", self.describe(critical));
+        match self.scene.precision {
+            Precision::F64 => self.run_with::<f64>(path, out, critical),
+            Precision::F32 => self.run_with::<f32>(path, out, critical),
+        }
+    }
+
+    fn run_with<T: Real>(
+        &self,
+        path: &Path,
+        out: &Path,
+        critical: f64,
+    ) -> Result<serde_json::Value> {
+        let start = Instant::now();
+        let spec = self.packing_spec::<T>();
+        let mut packing = generate_packing(&spec, self.bond_spec::<T>())?;
+        packing.world.local_damping = T::lit(self.solid.local_damping);
+        let particles = packing.world.particles.len();
+        let bonds = packing.world.bonds.len();
+        eprintln!(
+            "lbdem: packed {particles} particles, {bonds} bonds in {} steps (converged: {}; wall stresses {:?})",
+            packing.steps,
+            packing.converged,
+            packing.wall_stresses.map(|x| x.to_f64_exact())
+        );
+        let l = &self.loading;
+        let test = CompressionTest {
+            confining_stress: T::lit(l.confining_stress),
+            platen_speed: T::lit(l.platen_speed),
+            settle_steps: l.settle_steps,
+            max_strain: T::lit(l.max_strain),
+            post_peak_fraction: T::lit(l.post_peak_fraction),
+            record_interval: l.record_interval,
+        };
+        let title = self
+            .scene
+            .name
+            .clone()
+            .unwrap_or_else(|| "lbdem dry scene".into());
+        let mut snapshots = 0usize;
+        let mut records = 0u64;
+        let mut write_error = None;
+        let mut snapshot = |w: &DemWorld<T>, n: usize| {
+            let text = particles_vtk(&title, &w.particles, &w.broken_bond_fraction());
+            let file = out.join(format!("particles_{n:04}.vtk"));
+            if let Err(e) = write_atomic(&file, text.as_bytes()) {
+                write_error.get_or_insert(e);
+            }
+        };
+        snapshot(&packing.world, 0);
+        snapshots += 1;
+        let result = run_compression(&mut packing, &test, |w, _| {
+            records += 1;
+            if l.vtk_interval > 0 && records.is_multiple_of(l.vtk_interval) {
+                snapshot(w, snapshots);
+                snapshots += 1;
+            }
+        });
+        snapshot(&packing.world, snapshots);
+        snapshots += 1;
+        if let Some(e) = write_error {
+            return Err(e);
+        }
+        let w = &packing.world;
+        let dt = w.timestep().to_f64_exact();
+        let curve = csv(
+            &[
+                "step",
+                "axial_strain",
+                "lateral_strain",
+                "axial_stress",
+                "deviator_stress",
+                "lateral_stress",
+                "broken_bonds",
+            ],
+            result.curve.iter().map(|c| {
+                vec![
+                    c.step as f64,
+                    c.axial_strain,
+                    c.lateral_strain,
+                    c.axial_stress,
+                    c.deviator_stress,
+                    c.lateral_stress,
+                    c.broken_bonds as f64,
+                ]
+            }),
+        );
+        write_atomic(&out.join("stress_strain.csv"), curve.as_bytes())?;
+        let mut broken =
+            String::from("step,time,particle_i,particle_j,x,y,mode,orientation,load\n");
+        for b in &w.breaks {
+            let mode = match b.mode {
+                BreakMode::Tension => "tension",
+                BreakMode::Shear => "shear",
+                BreakMode::Compression => "compression",
+            };
+            broken += &format!(
+                "{},{:.10e},{},{},{:.10e},{:.10e},{mode},{:.10e},{:.10e}\n",
+                b.step,
+                b.step as f64 * dt,
+                b.pair[0],
+                b.pair[1],
+                b.position[0].to_f64_exact(),
+                b.position[1].to_f64_exact(),
+                b.orientation.to_f64_exact(),
+                b.load.to_f64_exact()
+            );
+        }
+        write_atomic(&out.join("broken_bonds.csv"), broken.as_bytes())?;
+        let count = |m: BreakMode| w.breaks.iter().filter(|b| b.mode == m).count();
+        let summary = json!({
+            "lbdem_version": env!("CARGO_PKG_VERSION"),
+            "scene_file": path.display().to_string(),
+            "scene": self,
+            "units": self.scene.units.labels(),
+            "derived": {
+                "particles": particles,
+                "bonds": bonds,
+                "packing_steps": packing.steps,
+                "packing_converged": packing.converged,
+                "size_factor": packing.size_factor.to_f64_exact(),
+                "isotropic_wall_stresses": packing.wall_stresses.map(|x| x.to_f64_exact()),
+                "critical_time_step": critical,
+                "timestep": dt,
+            },
+            "results": {
+                "youngs_modulus": result.youngs_modulus,
+                "peak_axial_stress": result.peak_stress,
+                "peak_deviator_stress": result.peak_deviator,
+                "peak_axial_strain": result.peak_strain,
+                "loading_steps": result.steps,
+                "broken_bonds": w.breaks.len(),
+                "broken_in_tension": count(BreakMode::Tension),
+                "broken_in_shear": count(BreakMode::Shear),
+                "broken_in_compression": count(BreakMode::Compression),
+                "vtk_snapshots": snapshots,
+            },
+            "wall_seconds": start.elapsed().as_secs_f64(),
+            "threads": rayon::current_num_threads(),
+        });
+        let text = serde_json::to_string_pretty(&summary).unwrap_or_default();
+        write_atomic(&out.join("summary.json"), text.as_bytes())?;
+        eprintln!(
+            "lbdem: peak axial stress {:.4e} at strain {:.3e}, E = {:.4e}, {} bonds broken; outputs in {}",
+            result.peak_stress,
+            result.peak_strain,
+            result.youngs_modulus,
+            w.breaks.len(),
+            out.display()
+        );
+        Ok(summary)
+    }
+}

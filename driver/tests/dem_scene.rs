@@ -1,0 +1,118 @@
+//! The `kind = "dry"` scene: parsing with field-naming errors, the critical-step refusal, and a small run
+//! writing stress_strain.csv, broken_bonds.csv, VTK snapshots and summary.json.
+use std::path::PathBuf;
+
+use lbdem::run::{check, run, RunOptions};
+use lbdem::solid::scene::DryScene;
+use lbdem::solid::vtk::parse_particles_vtk;
+
+const BUNDLED: &str = include_str!("../../scenes/uniaxial_compression.toml");
+
+fn scratch(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("lbdem-dry-{}-{name}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+fn write_scene(name: &str, text: &str) -> PathBuf {
+    let path = scratch(name).join("scene.toml");
+    std::fs::write(&path, text).unwrap();
+    path
+}
+
+#[test]
+fn bundled_scene_checks_and_prints_the_critical_step() {
+    let path = write_scene("bundled", BUNDLED);
+    let text = check(&path).unwrap();
+    assert!(text.contains("kind = dry"), "{text}");
+    assert!(text.contains("DEM critical step"), "{text}");
+}
+
+#[test]
+fn bad_fields_are_named() {
+    let cases = [
+        ("timestep = 5e-5", "timestep = 5e-3", "solid.timestep"),
+        ("friction = 0.5 ", "friction = -0.5 ", "solid.friction"),
+        (
+            "aspect_ratio = 1.0",
+            "aspect_ratio = 1.5",
+            "packing.aspect_ratio",
+        ),
+        (
+            "platen_speed = 0.02",
+            "platen_speed = 0.0",
+            "loading.platen_speed",
+        ),
+        (
+            "tensile_strength = 500.0",
+            "tensile_strength = 500.0\nbogus = 1",
+            "bogus",
+        ),
+    ];
+    for (from, to, field) in cases {
+        assert!(BUNDLED.contains(from), "{from}");
+        let text = BUNDLED.replacen(from, to, 1);
+        let err = match DryScene::from_toml(&text, "test.toml") {
+            Err(e) => e.to_string(),
+            Ok(s) => s
+                .check(std::path::Path::new("test.toml"))
+                .unwrap_err()
+                .to_string(),
+        };
+        assert!(err.contains(field), "{field}: {err}");
+    }
+}
+
+#[test]
+fn small_dry_run_writes_its_outputs() {
+    let text = BUNDLED
+        .replacen("width = 2.0", "width = 1.2", 1)
+        .replacen("height = 4.0", "height = 2.4", 1)
+        .replacen("vtk_interval = 40", "vtk_interval = 100", 1);
+    let path = write_scene("small", &text);
+    let out = scratch("small").join("out");
+    let summary = run(
+        &path,
+        &out,
+        &RunOptions {
+            overwrite: true,
+            quiet: true,
+        },
+    )
+    .unwrap();
+    let results = &summary["results"];
+    let peak = results["peak_axial_stress"].as_f64().unwrap();
+    assert!(peak > 100.0 && peak.is_finite(), "{summary}");
+    let broken = results["broken_bonds"].as_u64().unwrap() as usize;
+    assert!(broken > 0);
+    let curve = std::fs::read_to_string(out.join("stress_strain.csv")).unwrap();
+    assert!(curve.starts_with("step,axial_strain"));
+    assert!(curve.lines().count() > 10);
+    let breaks = std::fs::read_to_string(out.join("broken_bonds.csv")).unwrap();
+    assert_eq!(breaks.lines().count(), broken + 1);
+    let particles = summary["derived"]["particles"].as_u64().unwrap() as usize;
+    let snapshots = results["vtk_snapshots"].as_u64().unwrap() as usize;
+    assert!(snapshots >= 2);
+    let last =
+        std::fs::read_to_string(out.join(format!("particles_{:04}.vtk", snapshots - 1))).unwrap();
+    let vtk = parse_particles_vtk(&last).expect("VTK parses");
+    assert_eq!(vtk.points.len(), particles);
+    let fraction = &vtk
+        .arrays
+        .iter()
+        .find(|a| a.0 == "broken_bond_fraction")
+        .unwrap()
+        .2;
+    assert!(fraction.iter().any(|&f| f > 0.0));
+    assert!(out.join("summary.json").exists());
+    // A second run into the same directory is refused without --overwrite.
+    let again = run(
+        &path,
+        &out,
+        &RunOptions {
+            overwrite: false,
+            quiet: true,
+        },
+    );
+    assert!(again.is_err());
+}
