@@ -9,7 +9,7 @@
 //!    break recorded as a [`BreakRecord`] (step, position, mode, orientation, load);
 //! 4. platens: [`wall_contact`] + [`linear_contact_force`] with the platen's own velocity (a moving wall);
 //! 5. applied forces on chosen particles (`external_force`), gravity;
-//! 6. [`central_difference_step`] with PFC local damping α;
+//! 6. [`central_difference_step`] with PFC local damping α (particles marked `held` are not moved);
 //! 7. platens move: constant speed, or the PFC servo v = G (σ_target − σ_measured), G = λ L/(k_n N_c Δt).
 //!
 //! Determinism: the per-pair and per-bond forces of steps 2–3 and the integration of step 6 are computed in
@@ -226,6 +226,8 @@ pub struct DemWorld<T> {
     pub gravity: [T; 2],
     /// Applied force per particle (e.g. the axial stress through boundary particles).
     pub external_force: Vec<[T; 2]>,
+    /// Particles held in place (not integrated: zero velocity, fixed position and angle), e.g. supports.
+    pub held: Vec<bool>,
     /// Every bond break so far, in order.
     pub breaks: Vec<BreakRecord<T>>,
     /// Broad-phase skin: pairs whose bounding circles are within it are tested.
@@ -281,6 +283,7 @@ impl<T: Real> DemWorld<T> {
             local_damping: T::lit(lbdem_kernels::dem::law::DEFAULT_LOCAL_DAMPING),
             gravity: [T::zero(); 2],
             external_force: vec![[T::zero(); 2]; n],
+            held: vec![false; n],
             breaks: Vec::new(),
             margin: T::zero(),
             dt,
@@ -703,14 +706,22 @@ impl<T: Real> DemWorld<T> {
             add_to(f, *e);
         }
 
-        // Integrate (independent per particle).
+        // Integrate (independent per particle); held particles stay where they are.
         let (gravity, alpha) = (self.gravity, self.local_damping);
+        if self.held.len() != n {
+            self.held.resize(n, false);
+        }
         self.particles
             .par_iter_mut()
             .zip(self.force.par_iter())
             .zip(self.torque.par_iter())
+            .zip(self.held.par_iter())
             .with_min_len(PARALLEL_CHUNK)
-            .for_each(|((p, f), t)| central_difference_step(p, *f, *t, gravity, alpha, dt));
+            .for_each(|(((p, f), t), &held)| {
+                if !held {
+                    central_difference_step(p, *f, *t, gravity, alpha, dt)
+                }
+            });
 
         // Platen motion: servo speeds from this step's stresses, then move.
         if let Some(b) = self.sample_box {
