@@ -49,12 +49,11 @@ fn bonded_beam_in_three_point_bending() {
         sig6(world.critical_time_step())
     );
     out += "bottom row: column, displacement x, displacement y (cm)\n";
-    for c in 0..columns {
-        let p = &world.particles[c];
+    for (c, (p, s)) in world.particles.iter().zip(&start).take(columns).enumerate() {
         out += &format!(
             "{c:2} {} {}\n",
-            sig6(p.position[0] - start[c][0]),
-            sig6(p.position[1] - start[c][1])
+            sig6(p.position[0] - s[0]),
+            sig6(p.position[1] - s[1])
         );
     }
     let p = &world.particles[loaded];
