@@ -111,8 +111,8 @@ pub struct PackingSpec<T> {
 impl PackingSpec<f64> {
     /// The dissertation's ch. 6.6 grains (radius 0.07–0.11 cm, density 2.65 g/cm³ × 1 cm) in a W × H box, with
     /// table 6.1's contact stiffness k_n = 1e5 dyne/cm and friction 0.5 (k_s = k_n here: table 6.1's
-    /// k_s = 6e5 > k_n is kept out of the default), the ch. 6.6 hydrostatic stress of 50 dyne/cm², and a step of 0.5 × the
-    /// critical step of a coordination-6 disc (≈ 5e-5 s).
+    /// k_s = 6e5 > k_n is kept out of the default), the ch. 6.6 hydrostatic stress of 50 dyne/cm², and a
+    /// step of 5e-5 s (about a third of the critical step of the smallest disc with six contacts).
     pub fn dissertation(width: f64, height: f64, aspect_ratio: f64, seed: u64) -> Self {
         PackingSpec {
             width,
