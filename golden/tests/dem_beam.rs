@@ -1,11 +1,14 @@
 //! Golden snapshot of a small bonded beam (dissertation ch. 6.6 point bonds, eq. 6.13, table 6.1 values) in
 //! three-point bending, run through `lbdem::solid::DemWorld`: 12 × 3 discs (radius 0.1 cm, 2.65 g/cm³) on a
 //! triangular lattice, every touching pair bonded (k_b = 1e5 dyne/cm, F_crit = 700 dyne), contacts
-//! k_n = 1e5, k_s = 6e5 dyne/cm, μ = 0.5; the two bottom corner discs are held (`DemWorld::held`) and
-//! the middle disc of the top row carries 200 dyne downwards; 3000 steps of 5e-5 s with local damping 0.7
-//! bring it to rest. Values are rounded to 6 significant digits: the step is bitwise deterministic (fixed
-//! summation order, any thread count), so only a change of the arithmetic shows up. A changed snapshot is
-//! reviewed, never blindly accepted.
+//! k_n = 1e5, k_s = 6e5 dyne/cm, frictionless; the two bottom corner discs are held (`DemWorld::held`) and
+//! the middle disc of the top row carries 200 dyne downwards; 10 000 steps of 5e-5 s with local damping 0.7
+//! bring it to static equilibrium. Values are rounded to 6 significant digits. The step is bitwise
+//! deterministic for any thread count, but not across builds: `cargo test -p lbdem-golden` and
+//! `cargo test --workspace` unify num-traits' features differently (libm or std sin/cos/hypot, last-bit
+//! differences), and a ringing or frictional (path-dependent) state amplifies those to the 4th digit
+//! (measured). So the snapshot is taken at rest and without friction, where the state is the unique elastic
+//! equilibrium. A changed snapshot is reviewed, never blindly accepted.
 use lbdem::solid::{hexagonal_packing, BondSpec, DemWorld};
 use lbdem_kernels::dem::assembly::ContactModel;
 
@@ -20,7 +23,7 @@ fn bonded_beam_in_three_point_bending() {
     let model = ContactModel {
         normal_stiffness: 1e5,
         shear_stiffness: 6e5,
-        friction: 0.5,
+        friction: 0.0,
         restitution: 1.0,
         no_tension: true,
     };
@@ -39,7 +42,7 @@ fn bonded_beam_in_three_point_bending() {
     let loaded = (rows - 1) * columns + columns / 2;
     world.external_force[loaded] = [0.0, -200.0];
     let start: Vec<[f64; 2]> = world.particles.iter().map(|p| p.position).collect();
-    for _ in 0..3000 {
+    for _ in 0..10_000 {
         world.step();
     }
     let mut out = format!(
