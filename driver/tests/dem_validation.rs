@@ -259,6 +259,12 @@ fn step_above_critical_is_refused_naming_the_field() {
     // Bonding stiffens the assembly: the critical step falls.
     let mut p = bonded_hexagonal_block(30);
     let before = p.world.critical_time_step();
+    // Bonding again adds nothing: every touching pair already has its bond.
+    let again = p
+        .world
+        .bond_touching_pairs(parallel_bonds(BOND_STIFFNESS, BOND_STRENGTH), 0.005)
+        .unwrap();
+    assert_eq!(again, 0);
     p.world.bonds.clear();
     assert!(p.world.critical_time_step() > before);
 }

@@ -160,7 +160,7 @@ pub struct Packing<T> {
 }
 
 /// The range checks of a [`PackingSpec`], naming the `packing.*` field.
-pub fn fill_box_spec_check<T: Real>(s: &PackingSpec<T>) -> Result<()> {
+pub fn check_packing_spec<T: Real>(s: &PackingSpec<T>) -> Result<()> {
     let pos = |field: &str, v: T| -> Result<()> {
         if v.is_finite() && v > T::zero() {
             Ok(())
@@ -218,7 +218,7 @@ pub fn fill_box_spec_check<T: Real>(s: &PackingSpec<T>) -> Result<()> {
 /// Draw the sizes and fill the box (steps 1–2). Returns full-size particles at their fill positions and the
 /// shrink factor s.
 pub fn fill_box<T: Real>(spec: &PackingSpec<T>) -> Result<(Vec<Particle<T>>, T)> {
-    fill_box_spec_check(spec)?;
+    check_packing_spec(spec)?;
     let mut rng = ChaCha8Rng::seed_from_u64(spec.seed);
     let target = spec.solid_fraction * spec.width * spec.height;
     let mut area = T::zero();

@@ -402,7 +402,7 @@ impl DryScene {
         }
         // The packing spec re-checks sizes, aspect ratio and solid fraction with field names.
         let spec = self.packing_spec::<f64>();
-        super::packing::fill_box_spec_check(&spec)?;
+        super::packing::check_packing_spec(&spec)?;
         Ok(())
     }
 

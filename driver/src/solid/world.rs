@@ -394,15 +394,21 @@ impl<T: Real> DemWorld<T> {
         b
     }
 
-    /// Bond every pair whose surfaces are closer than `gap` (overlapping pairs included); returns the number
-    /// of bonds added. Rechecks the time step against the stiffer assembly.
+    /// Bond every pair whose surfaces are closer than `gap` (overlapping pairs included) and that has no bond
+    /// yet (intact or broken); returns the number of bonds added. Rechecks the time step against the stiffer
+    /// assembly.
     pub fn bond_touching_pairs(&mut self, spec: BondSpec<T>, gap: T) -> Result<usize> {
         let saved = self.margin;
         self.margin = self.margin.max(gap);
         self.broad_phase();
         self.margin = saved;
+        let existing: std::collections::HashSet<[usize; 2]> =
+            self.bonds.iter().map(|b| b.pair).collect();
         let mut added = 0;
         for &[i, j] in &self.pairs {
+            if existing.contains(&[i, j]) {
+                continue;
+            }
             let (pi, pj) = (&self.particles[i], &self.particles[j]);
             let c = closest_approach(pi, pj);
             if c.overlap <= -gap {
