@@ -41,8 +41,8 @@ pub struct CurvePoint {
     pub step: u64,
     /// Axial strain ε.
     pub axial_strain: f64,
-    /// Lateral strain (width change / initial width, extension positive; 0 unconfined... measured from the
-    /// lateral platens when confined, from the particles' bounding box otherwise).
+    /// Lateral strain: width change / width at the start of loading, extension positive (the width is the
+    /// lateral platen distance when confined, the particles' bounding-box width when unconfined).
     pub lateral_strain: f64,
     /// Axial stress σ_a.
     pub axial_stress: f64,
@@ -88,8 +88,8 @@ fn axial_stress<T: Real>(w: &DemWorld<T>, b: &SampleBox) -> T {
     T::lit(0.5) * (w.platens[b.bottom].stress() + w.platens[b.top].stress())
 }
 
-/// Run a compression test on a bonded packing (consumed world state is mutated in place). `on_record` sees
-/// each recorded point (progress, output).
+/// Run a compression test on a bonded packing (its world is advanced in place). `on_record` sees each
+/// recorded point (progress, output).
 pub fn run_compression<T: Real>(
     packing: &mut Packing<T>,
     test: &CompressionTest<T>,
