@@ -81,7 +81,7 @@ fn small_dry_run_writes_its_outputs() {
     )
     .unwrap();
     let results = &summary["results"];
-    let peak = results["peak_axial_stress"].as_f64().unwrap();
+    let peak = results["test"]["peak_axial_stress"].as_f64().unwrap();
     assert!(peak > 100.0 && peak.is_finite(), "{summary}");
     let broken = results["broken_bonds"].as_u64().unwrap() as usize;
     assert!(broken > 0);
@@ -115,4 +115,38 @@ fn small_dry_run_writes_its_outputs() {
         },
     );
     assert!(again.is_err());
+}
+
+#[test]
+fn fracture_test_dry_control_breaks_no_bonds() {
+    // Dissertation ch. 6.6, without fluid: hydrostatic 50, then the axial stress (through the top boundary
+    // particles) dropped to 40 with the lateral platens holding 50. A bonded sample must not fracture.
+    let text = BUNDLED
+        .replacen("width = 2.0", "width = 2.4", 1)
+        .replacen("height = 4.0", "height = 1.2", 1)
+        .replacen("vtk_interval = 40", "vtk_interval = 0", 1)
+        .replacen(
+            "confining_stress = 0.0   # uniaxial",
+            "test = \"boundary_stress\"\naxial_stress = 40.0\nlateral_stress = 50.0\nsteps = 4000",
+            1,
+        )
+        .replacen("platen_speed = 0.02      # cm/s each\n", "", 1)
+        .replacen("max_strain = 0.05\n", "", 1);
+    let path = write_scene("control", &text);
+    let out = scratch("control").join("out");
+    let summary = run(
+        &path,
+        &out,
+        &RunOptions {
+            overwrite: true,
+            quiet: true,
+        },
+    )
+    .unwrap();
+    let results = &summary["results"];
+    assert_eq!(results["broken_bonds"].as_u64(), Some(0), "{summary}");
+    let lateral = results["test"]["final_lateral_stress"].as_f64().unwrap();
+    assert!((lateral - 50.0).abs() < 5.0, "lateral {lateral}");
+    let curve = std::fs::read_to_string(out.join("stress_strain.csv")).unwrap();
+    assert_eq!(curve.lines().count(), 1 + 4000 / 50);
 }

@@ -197,3 +197,82 @@ pub fn run_compression<T: Real>(
         curve,
     }
 }
+
+/// The loading of the dissertation's fracture test (ch. 6.6) without fluid, its dry control: the lateral
+/// stress is held by servo platens on the left and right, the axial stress (along y, the sample's short axis)
+/// is applied as forces on the particles along the top boundary (the top platen is removed, so fluid could
+/// pass), and the bottom platen is fixed.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BoundaryStressTest<T> {
+    /// Lateral stress held by the servo platens.
+    pub lateral_stress: T,
+    /// Axial stress applied through the top boundary particles.
+    pub axial_stress: T,
+    /// Particles whose bounding circle reaches within this of the top of the assembly carry the axial load.
+    pub boundary_depth: T,
+    /// Steps to run.
+    pub steps: u64,
+    /// Steps between recorded points.
+    pub record_interval: u64,
+}
+
+/// Run [`BoundaryStressTest`] on a packing: returns the record, with the axial strain measured from the mean
+/// height of the loaded particles (compression positive) and the lateral strain from the lateral platens.
+pub fn run_boundary_stress<T: Real>(
+    packing: &mut Packing<T>,
+    test: &BoundaryStressTest<T>,
+    mut on_record: impl FnMut(&DemWorld<T>, &CurvePoint),
+) -> Vec<CurvePoint> {
+    let b = packing.sample_box;
+    let w = &mut packing.world;
+    w.platens[b.top].active = false;
+    w.sample_box = None;
+    let width = w.platens[b.right].wall.point[0] - w.platens[b.left].wall.point[0];
+    let height = w.platens[b.top].wall.point[1] - w.platens[b.bottom].wall.point[1];
+    w.platens[b.bottom].length = width;
+    w.platens[b.bottom].control = PlatenControl::Speed(T::zero());
+    for side in [b.left, b.right] {
+        w.platens[side].length = height;
+        w.platens[side].control = PlatenControl::Servo {
+            target_stress: test.lateral_stress,
+            relaxation: T::lit(0.5),
+            max_speed: T::lit(1e-3) * height / w.timestep(),
+        };
+    }
+    let top = w.boundary_particles(3, test.boundary_depth);
+    w.apply_boundary_stress(&top, [T::zero(), -T::one()], test.axial_stress, width);
+    let mean_top = |w: &DemWorld<T>| {
+        top.iter()
+            .map(|&i| w.particles[i].position[1].to_f64_exact())
+            .sum::<f64>()
+            / top.len().max(1) as f64
+    };
+    let (y0, h0) = (mean_top(w), height.to_f64_exact());
+    let lateral0 = width.to_f64_exact();
+    let mut curve = Vec::new();
+    let interval = test.record_interval.max(1);
+    let mut done = 0;
+    while done < test.steps {
+        for _ in 0..interval.min(test.steps - done) {
+            w.step();
+        }
+        done += interval.min(test.steps - done);
+        let lateral =
+            (w.platens[b.right].wall.point[0] - w.platens[b.left].wall.point[0]).to_f64_exact();
+        let axial = w.platens[b.bottom].stress().to_f64_exact();
+        let point = CurvePoint {
+            step: w.step_count(),
+            axial_strain: (y0 - mean_top(w)) / h0,
+            lateral_strain: (lateral - lateral0) / lateral0,
+            axial_stress: axial,
+            deviator_stress: axial
+                - 0.5 * (w.platens[b.left].stress() + w.platens[b.right].stress()).to_f64_exact(),
+            lateral_stress: 0.5
+                * (w.platens[b.left].stress() + w.platens[b.right].stress()).to_f64_exact(),
+            broken_bonds: w.breaks.len(),
+        };
+        on_record(w, &point);
+        curve.push(point);
+    }
+    curve
+}

@@ -22,6 +22,9 @@ pub mod scene;
 pub mod vtk;
 pub mod world;
 
-pub use loading::{run_compression, CompressionResult, CompressionTest, CurvePoint};
+pub use loading::{
+    run_boundary_stress, run_compression, BoundaryStressTest, CompressionResult, CompressionTest,
+    CurvePoint,
+};
 pub use packing::{boxed_sample, generate_packing, hexagonal_packing, Packing, PackingSpec};
 pub use world::{Bond, BondLaw, BondSpec, BreakRecord, DemWorld, Platen, PlatenControl, SampleBox};

@@ -1,6 +1,7 @@
 //! The `kind = "dry"` scene: a bonded sample packed by the ch. 2 procedure and loaded between platens
-//! (uniaxial or servo-confined biaxial compression at a constant platen speed), with no fluid (no lattice is
-//! allocated). Outputs: `stress_strain.csv`, `broken_bonds.csv`, `particles_NNNN.vtk` (legacy VTK), and
+//! (uniaxial or servo-confined biaxial compression at a constant platen speed; or, with
+//! `test = "boundary_stress"`, the ch. 6.6 fracture test's dry control: axial stress through the top boundary
+//! particles, lateral stress by servo platens), with no fluid (no lattice is allocated). Outputs: `stress_strain.csv`, `broken_bonds.csv`, `particles_NNNN.vtk` (legacy VTK), and
 //! `summary.json` (written last).
 //!
 //! ```toml
@@ -44,7 +45,9 @@ use lbdem_kernels::Real;
 use serde::{Deserialize, Serialize};
 use serde_json::json;
 
-use super::loading::{run_compression, CompressionTest};
+use super::loading::{
+    run_boundary_stress, run_compression, BoundaryStressTest, CompressionTest, CurvePoint,
+};
 use super::packing::{generate_packing, hexagonal_packing, PackingSpec};
 use super::vtk::particles_vtk;
 use super::world::{BondSpec, DemWorld, CRITICAL_STEP_SAFETY};
@@ -171,20 +174,46 @@ pub struct SolidSection {
     pub bonds: Option<BondsSection>,
 }
 
-/// `[loading]`: the compression test.
+/// Which loading a dry scene runs.
+#[derive(Clone, Copy, Debug, Deserialize, Serialize, PartialEq, Eq, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum LoadingKind {
+    /// Uniaxial or biaxial compression between platens at a constant speed.
+    #[default]
+    Compression,
+    /// The fracture test's dry control (ch. 6.6): lateral stress by servo platens, axial stress through the
+    /// top boundary particles, for a number of steps.
+    BoundaryStress,
+}
+
+/// `[loading]`: the test.
 #[derive(Clone, Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct LoadingSection {
-    /// Confining stress (0: uniaxial).
+    /// Which test (default "compression").
+    #[serde(default)]
+    pub test: LoadingKind,
+    /// Confining stress (compression; 0: uniaxial).
     #[serde(default)]
     pub confining_stress: f64,
-    /// Speed of each axial platen.
+    /// Speed of each axial platen (compression).
+    #[serde(default)]
     pub platen_speed: f64,
-    /// Steps before loading (default 1000).
+    /// Steps before loading (compression; default 1000).
     #[serde(default = "default_settle")]
     pub settle_steps: u64,
-    /// Stop at this axial strain.
+    /// Stop at this axial strain (compression).
+    #[serde(default)]
     pub max_strain: f64,
+    /// Axial stress through the top boundary particles (boundary_stress).
+    #[serde(default)]
+    pub axial_stress: f64,
+    /// Lateral stress held by the servo platens (boundary_stress).
+    #[serde(default)]
+    pub lateral_stress: f64,
+    /// Steps to run (boundary_stress).
+    #[serde(default)]
+    pub steps: u64,
     /// Stop when the deviator falls to this fraction of its peak (default 0.7).
     #[serde(default = "default_post_peak")]
     pub post_peak_fraction: f64,
@@ -373,17 +402,41 @@ impl DryScene {
             None => {}
         }
         let l = &self.loading;
-        non_negative(
-            "loading.confining_stress",
-            l.confining_stress,
-            "0 for uniaxial",
-        )?;
-        positive(
-            "loading.platen_speed",
-            l.platen_speed,
-            "slow: quasi-static (REFERENCE §7.4)",
-        )?;
-        positive("loading.max_strain", l.max_strain, "e.g. 0.05")?;
+        match l.test {
+            LoadingKind::Compression => {
+                non_negative(
+                    "loading.confining_stress",
+                    l.confining_stress,
+                    "0 for uniaxial",
+                )?;
+                positive(
+                    "loading.platen_speed",
+                    l.platen_speed,
+                    "slow: quasi-static (REFERENCE §7.4)",
+                )?;
+                positive("loading.max_strain", l.max_strain, "e.g. 0.05")?;
+            }
+            LoadingKind::BoundaryStress => {
+                positive(
+                    "loading.axial_stress",
+                    l.axial_stress,
+                    "ch. 6.6: 40 dyne/cm^2",
+                )?;
+                positive(
+                    "loading.lateral_stress",
+                    l.lateral_stress,
+                    "ch. 6.6: 50 dyne/cm^2",
+                )?;
+                if l.steps == 0 {
+                    return Err(LbdemError::field(
+                        "loading.steps",
+                        0,
+                        "test = \"boundary_stress\" needs a number of steps >= 1",
+                        "e.g. 20000",
+                    ));
+                }
+            }
+        }
         if !(l.post_peak_fraction > 0.0 && l.post_peak_fraction < 1.0) {
             return Err(LbdemError::field(
                 "loading.post_peak_fraction",
@@ -529,10 +582,16 @@ impl DryScene {
             CRITICAL_STEP_SAFETY * critical,
             self.solid.timestep,
             self.solid.timestep / critical,
-            if self.loading.confining_stress > 0.0 {
-                format!("biaxial compression, confining stress {}", self.loading.confining_stress)
-            } else {
-                "uniaxial compression".to_string()
+            match (self.loading.test, self.loading.confining_stress > 0.0) {
+                (LoadingKind::BoundaryStress, _) => format!(
+                    "boundary stress (fracture-test dry control): axial {} through the top particles, lateral {} by servo platens, {} steps;",
+                    self.loading.axial_stress, self.loading.lateral_stress, self.loading.steps
+                ),
+                (_, true) => format!(
+                    "biaxial compression, confining stress {}",
+                    self.loading.confining_stress
+                ),
+                _ => "uniaxial compression".to_string(),
             },
             self.loading.platen_speed,
             self.loading.max_strain,
@@ -600,13 +659,45 @@ impl DryScene {
         };
         snapshot(&packing.world, 0);
         snapshots += 1;
-        let result = run_compression(&mut packing, &test, |w, _| {
+        let mut on_record = |w: &DemWorld<T>, _: &CurvePoint| {
             records += 1;
             if l.vtk_interval > 0 && records.is_multiple_of(l.vtk_interval) {
                 snapshot(w, snapshots);
                 snapshots += 1;
             }
-        });
+        };
+        let (curve_points, results) = match l.test {
+            LoadingKind::Compression => {
+                let r = run_compression(&mut packing, &test, &mut on_record);
+                let results = json!({
+                    "youngs_modulus": r.youngs_modulus,
+                    "peak_axial_stress": r.peak_stress,
+                    "peak_deviator_stress": r.peak_deviator,
+                    "peak_axial_strain": r.peak_strain,
+                    "loading_steps": r.steps,
+                });
+                (r.curve, results)
+            }
+            LoadingKind::BoundaryStress => {
+                let test = BoundaryStressTest {
+                    lateral_stress: T::lit(l.lateral_stress),
+                    axial_stress: T::lit(l.axial_stress),
+                    boundary_depth: T::lit(0.5 * self.packing.radius_min),
+                    steps: l.steps,
+                    record_interval: l.record_interval,
+                };
+                let curve = run_boundary_stress(&mut packing, &test, &mut on_record);
+                let last = curve.last().copied();
+                let results = json!({
+                    "final_axial_strain": last.map(|c| c.axial_strain),
+                    "final_lateral_strain": last.map(|c| c.lateral_strain),
+                    "final_bottom_platen_stress": last.map(|c| c.axial_stress),
+                    "final_lateral_stress": last.map(|c| c.lateral_stress),
+                    "loading_steps": l.steps,
+                });
+                (curve, results)
+            }
+        };
         snapshot(&packing.world, snapshots);
         snapshots += 1;
         if let Some(e) = write_error {
@@ -624,7 +715,7 @@ impl DryScene {
                 "lateral_stress",
                 "broken_bonds",
             ],
-            result.curve.iter().map(|c| {
+            curve_points.iter().map(|c| {
                 vec![
                     c.step as f64,
                     c.axial_strain,
@@ -675,11 +766,7 @@ impl DryScene {
                 "timestep": dt,
             },
             "results": {
-                "youngs_modulus": result.youngs_modulus,
-                "peak_axial_stress": result.peak_stress,
-                "peak_deviator_stress": result.peak_deviator,
-                "peak_axial_strain": result.peak_strain,
-                "loading_steps": result.steps,
+                "test": results,
                 "broken_bonds": w.breaks.len(),
                 "broken_in_tension": count(BreakMode::Tension),
                 "broken_in_shear": count(BreakMode::Shear),
@@ -692,10 +779,7 @@ impl DryScene {
         let text = serde_json::to_string_pretty(&summary).unwrap_or_default();
         write_atomic(&out.join("summary.json"), text.as_bytes())?;
         eprintln!(
-            "lbdem: peak axial stress {:.4e} at strain {:.3e}, E = {:.4e}, {} bonds broken; outputs in {}",
-            result.peak_stress,
-            result.peak_strain,
-            result.youngs_modulus,
+            "lbdem: {results}; {} bonds broken; outputs in {}",
             w.breaks.len(),
             out.display()
         );
