@@ -96,12 +96,13 @@ fn triad_case(threads: usize) -> String {
     format!("triad/{threads}t")
 }
 
+/// Elements per rayon task of the triad (2 MiB per array): fine enough that a thread slowed down by another
+/// process on the machine is balanced by work stealing, as the lattice's row bands are.
+const TRIAD_CHUNK: usize = 1 << 18;
+
 /// STREAM triad, a = b + s·c, chunked over the pool's threads.
 fn triad(a: &mut [f64], b: &[f64], c: &[f64], s: f64) {
-    let chunk = a
-        .len()
-        .div_ceil(rayon::current_num_threads().max(1) * 4)
-        .max(4096);
+    let chunk = TRIAD_CHUNK;
     a.par_chunks_mut(chunk)
         .zip(b.par_chunks(chunk))
         .zip(c.par_chunks(chunk))
