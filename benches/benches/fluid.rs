@@ -15,7 +15,12 @@
 //! Each case's time per iteration is the median of criterion's samples (taken through `iter_custom`); a table
 //! with MLUPS, ceiling and ratio is printed at the end. Regenerate with
 //! `cargo bench -p lbdem-benches --bench fluid` (a filter such as `-- bgk/f64` runs a subset; the table then
-//! lists what ran).
+//! lists what ran). The load average is printed before and after: on a shared machine, other processes make the
+//! 2-thread figures (triad and lattice alike) noisy, so repeat and compare runs with a low load.
+//!
+//! The workspace builds for the baseline x86-64 target (SSE2). `RUSTFLAGS="-C target-cpu=native"` (or
+//! `x86-64-v3`) before the command measures the same code with AVX2/AVX-512; results stay bitwise identical
+//! (Rust never contracts a·b + c into an FMA), only speed changes.
 use std::collections::BTreeMap;
 use std::sync::Mutex;
 use std::time::{Duration, Instant};
@@ -293,7 +298,15 @@ fn print_summary() {
     println!(" ceiling; 256² (9 MB of f64 buffers) fits in the 32 MB L3, so it may exceed the memory ceiling)");
 }
 
+/// The 1-, 5- and 15-minute load averages, as `/proc/loadavg` gives them (empty where unavailable).
+fn load_average() -> String {
+    std::fs::read_to_string("/proc/loadavg")
+        .map(|s| s.split_whitespace().take(3).collect::<Vec<_>>().join(" "))
+        .unwrap_or_default()
+}
+
 fn main() {
+    let load_before = load_average();
     let mut c = Criterion::default().configure_from_args();
     bench_triad(&mut c);
     bench_lattice::<f64>(&mut c, "bgk", &[256, 1024, 2048]);
@@ -302,4 +315,9 @@ fn main() {
     bench_lattice::<f32>(&mut c, "psm", &[1024]);
     c.final_summary();
     print_summary();
+    println!(
+        "load average before: {load_before}; after: {} ({} CPUs)",
+        load_average(),
+        std::thread::available_parallelism().map_or(0, |n| n.get())
+    );
 }
