@@ -26,8 +26,12 @@ pub struct FluidLattice<T: Real> {
     params: FluidParams<T>,
     flags: Vec<u8>,
     special: Vec<u32>,
-    src: Vec<T>,
-    dst: Vec<T>,
+    /// Both population buffers in one allocation: `[first | gap | second]`, see [`buffer_gap`].
+    buffers: Vec<T>,
+    /// Start of the second buffer in `buffers`.
+    second: usize,
+    /// Whether the current (post-collision) populations are in the first buffer.
+    first_is_current: bool,
     band_rows: usize,
     steps: u64,
     coverage: Option<Coverage<T>>,
@@ -93,8 +97,9 @@ impl<T: Real> FluidLattice<T> {
             params,
             flags: vec![FLUID; shape.nodes()],
             special: Vec::new(),
-            src: vec![T::zero(); len],
-            dst: vec![T::zero(); len],
+            buffers: vec![T::zero(); 2 * len + buffer_gap::<T>(len)],
+            second: len + buffer_gap::<T>(len),
+            first_is_current: true,
             band_rows: 8,
             steps: 0,
             coverage: None,
@@ -162,7 +167,7 @@ impl<T: Real> FluidLattice<T> {
                 let (rho, u) = state(x, y);
                 let f = equilibrium(rho, u);
                 for (q, fq) in f.iter().enumerate() {
-                    self.src[q * stride + n] = *fq;
+                    self.current_mut()[q * stride + n] = *fq;
                 }
             }
         }
@@ -170,12 +175,26 @@ impl<T: Real> FluidLattice<T> {
 
     /// The current (post-collision) population buffer.
     pub fn populations(&self) -> &[T] {
-        &self.src
+        let len = self.shape.buffer_len();
+        if self.first_is_current {
+            &self.buffers[..len]
+        } else {
+            &self.buffers[self.second..self.second + len]
+        }
     }
 
     /// Mutable access to the current population buffer (for initial conditions and tests).
     pub fn populations_mut(&mut self) -> &mut [T] {
-        &mut self.src
+        self.current_mut()
+    }
+
+    fn current_mut(&mut self) -> &mut [T] {
+        let len = self.shape.buffer_len();
+        if self.first_is_current {
+            &mut self.buffers[..len]
+        } else {
+            &mut self.buffers[self.second..self.second + len]
+        }
     }
 
     /// Cover the lattice with discs (exact cell fractions, several discs per cell add up, capped at 1 by the
@@ -322,12 +341,21 @@ impl<T: Real> FluidLattice<T> {
         };
         let params = self.params;
         let special = &self.special;
-        let src = &self.src;
         let band_rows = self.band_rows;
         let band_len = band_rows * shape.nx;
         let bands = shape.ny.div_ceil(band_rows);
         // Split the nine destination planes into row bands.
-        let planes = planes_mut(&shape, &mut self.dst);
+        let (src, dst) = {
+            let len = shape.buffer_len();
+            let (first, rest) = self.buffers.split_at_mut(self.second);
+            let (first, second) = (&mut first[..len], &mut rest[..len]);
+            if self.first_is_current {
+                (&*first, second)
+            } else {
+                (&*second, first)
+            }
+        };
+        let planes = planes_mut(&shape, dst);
         let mut chunked: Vec<std::slice::ChunksMut<'_, T>> =
             planes.into_iter().map(|p| p.chunks_mut(band_len)).collect();
         // Split the covered nodes and their exchange buffer along the same bands.
@@ -389,7 +417,7 @@ impl<T: Real> FluidLattice<T> {
                     }
                 }
             });
-        std::mem::swap(&mut self.src, &mut self.dst);
+        self.first_is_current = !self.first_is_current;
         self.steps += 1;
     }
 
@@ -400,7 +428,7 @@ impl<T: Real> FluidLattice<T> {
         let mut u = vec![[T::zero(); 2]; n];
         gathered_moments(
             &self.shape,
-            &self.src,
+            self.populations(),
             &self.bc,
             &self.flags,
             self.params.force,
@@ -414,8 +442,8 @@ impl<T: Real> FluidLattice<T> {
     pub fn mass(&self) -> f64 {
         let mut m = 0.0;
         for q in 0..Q {
-            let plane =
-                &self.src[q * self.shape.stride..q * self.shape.stride + self.shape.nodes()];
+            let plane = &self.populations()
+                [q * self.shape.stride..q * self.shape.stride + self.shape.nodes()];
             for (v, &flag) in plane.iter().zip(self.flags.iter()) {
                 if flag != SOLID {
                     m += v.to_f64_exact();
@@ -439,4 +467,15 @@ impl<T: Real> FluidLattice<T> {
         }
         None
     }
+}
+
+/// Elements between the two population buffers, so that each plane of the second buffer starts 160 bytes (mod
+/// 4 KiB) after the same plane of the first. Planes within a buffer are 320 bytes apart (mod 4 KiB, see
+/// [`LatticeShape`]); with both buffers at the same offset, the store to plane q of the destination would hit
+/// the same 4 KiB offset as the load from plane q of the source a few elements before it ("4K aliasing": the
+/// load waits for the store). 160 bytes is as far as possible from every multiple of 320 bytes mod 4 KiB.
+fn buffer_gap<T>(len: usize) -> usize {
+    let size = std::mem::size_of::<T>().max(1);
+    let end = (len * size) % 4096;
+    (160 + 4096 - end) % 4096 / size
 }
