@@ -302,15 +302,17 @@ pub struct ArrayOutcome {
     pub gap: f64,
     /// Superficial velocity U (lattice units).
     pub superficial_velocity: f64,
-    /// F/(μU) with F = G l².
+    /// F/(μU) with F = G l², μ = ρ_f ν.
     pub drag: f64,
+    /// Mean fluid density ρ_f = Σ (1 − ε) ρ / Σ (1 − ε) (starts at 1; Ω₁ slowly moves mass into covered nodes).
+    pub fluid_density: f64,
     /// S&A's value at this c (when tabulated).
     pub reference_drag: Option<f64>,
     /// Relative error of `drag` against S&A.
     pub drag_error: Option<f64>,
     /// Re = U D/ν.
     pub reynolds: f64,
-    /// ∇P̄ = G l/(ρ₀ U²) (eq. 5.4).
+    /// ∇P̄ = G l/(ρ_f U²) (eq. 5.4).
     pub pressure_drop: f64,
     /// ∇P̄·Re (Stokes limit F̄ D/l).
     pub pressure_drop_times_reynolds: f64,
@@ -384,11 +386,18 @@ pub fn solve_array<T: Real>(case: &ArrayCase) -> Result<ArrayOutcome> {
             break;
         }
     }
-    let (_, u) = lattice.moments();
+    let (rho, u) = lattice.moments();
     let nu = case.viscosity();
     let g = case.force;
     let ll = (l * l) as f64;
-    let drag = g * ll / (nu * u_s);
+    // μ = ρ ν with the fluid's mean density (1 up to the slow transfer of mass into covered nodes under Ω₁).
+    let (mut rw, mut w) = (0.0, 0.0);
+    for (r, e) in rho.iter().zip(eps.iter()) {
+        rw += (1.0 - e) * r.to_f64_exact();
+        w += 1.0 - e;
+    }
+    let fluid_density = rw / w;
+    let drag = g * ll / (fluid_density * nu * u_s);
     let reference = sangani_acrivos_drag(case.solid_fraction).filter(|_| {
         SANGANI_ACRIVOS_SQUARE
             .iter()
@@ -396,13 +405,14 @@ pub fn solve_array<T: Real>(case: &ArrayCase) -> Result<ArrayOutcome> {
     });
     let diameter = 2.0 * case.radius();
     let reynolds = u_s * diameter / nu;
-    let pressure_drop = g * l as f64 / (u_s * u_s);
+    let pressure_drop = g * l as f64 / (fluid_density * u_s * u_s);
     Ok(ArrayOutcome {
         case: case.clone(),
         diameter,
         gap: case.gap(),
         superficial_velocity: u_s,
         drag,
+        fluid_density,
         reference_drag: reference,
         drag_error: reference.map(|r| drag / r - 1.0),
         reynolds,
