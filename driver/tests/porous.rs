@@ -256,7 +256,7 @@ fn omega1_mass_creep_into_covered_nodes_leaves_the_drag_unchanged() {
 #[ignore]
 fn full_resolution_drag_for_c_0_2_to_0_6() {
     // l = 80 puts ≥ 10 nodes across every gap (10.1 at c = 0.6): the ≤ 2 % class of REFERENCE §1.5. Measured
-    // −0.16, −0.26, −0.21, −0.63, −1.41 % for c = 0.2…0.6; from l = 40 to 80 the error falls 3.6–6×.
+    // −0.16, −0.26, −0.21, −0.63, −1.41 % for c = 0.2…0.6; from l = 40 to 80 the error falls 4.3–6.4×.
     for c in [0.2, 0.3, 0.4, 0.5, 0.6] {
         let coarse = solve_array::<f64>(&ArrayCase::stokes(40, c, 0.8)).expect("healthy run");
         let fine = solve_array::<f64>(&ArrayCase::stokes(80, c, 0.8)).expect("healthy run");
