@@ -6,7 +6,7 @@
 //! ```
 //!
 //! Full variants: drag at c = 0.2…0.6 for l = 20, 40, 80; the Re sweep of fig. 5.4 (targets 0.001 to 300;
-//! inertia lowers the measured Re of the highest targets to ~170) at
+//! inertia lowers the measured Re of the highest target to 185) at
 //! l = 80; a 200-disc jittered slab for Darcy's law; 200-disc slabs of four disc sizes for Kozeny–Carman.
 use lbdem::porous::{
     darcy_fit, fitted_kozeny_constant, solve_array, solve_porous, ArrayCase, PorousCase,
