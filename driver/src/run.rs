@@ -33,6 +33,9 @@ pub fn check(scene_path: &Path) -> Result<String> {
             }
             Ok(s)
         }
+        SceneKind::CylinderArray | SceneKind::PorousFlow => {
+            crate::porous::check(&scene, scene_path)
+        }
     }
 }
 
@@ -113,6 +116,9 @@ pub fn run(scene_path: &Path, out: &Path, opts: &RunOptions) -> Result<serde_jso
                 out.display()
             );
             Ok(summary)
+        }
+        SceneKind::CylinderArray | SceneKind::PorousFlow => {
+            crate::porous::run(&scene, scene_path, out, opts)
         }
     }
 }
