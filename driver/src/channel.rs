@@ -125,6 +125,17 @@ impl ChannelSetup {
                  is large; the dissertation recommends at least 4-5 nodes per pore throat"
             ));
         }
+        if let (crate::scene::Precision::F32, Some(tol)) =
+            (scene.scene.precision, scene.run.steady_tolerance)
+        {
+            if tol < 1e-6 {
+                warnings.push(format!(
+                    "run.steady_tolerance = {tol:e} is below what f32 resolves (~1e-6 relative flux change): \
+                     steadiness will not be detected and all steps will run; use precision = \"f64\" or a \
+                     tolerance >= 1e-6"
+                ));
+            }
+        }
         let steps = match (scene.run.steps, scene.run.duration) {
             (Some(s), _) => s,
             (None, Some(d)) => (d / units.timestep).ceil().max(1.0) as u64,

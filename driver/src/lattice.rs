@@ -3,7 +3,9 @@
 //!
 //! Bands are independent (each reads only the source buffer and writes only its own rows of the destination),
 //! so the result is bitwise the same for any number of threads or bands.
-use lbdem_kernels::coverage::disc_cell_fraction;
+use lbdem_kernels::coupling::{
+    body_cell_fraction, body_cell_range, reduce_exchange, rigid_velocity, BodyShape, CoupledBody,
+};
 use lbdem_kernels::fluid::boundary::Boundaries;
 use lbdem_kernels::fluid::collide::{PsmParams, SolidOperator, SolidShare, Weighting};
 use lbdem_kernels::fluid::d2q9::{equilibrium, Q};
@@ -24,8 +26,12 @@ pub struct FluidLattice<T: Real> {
     params: FluidParams<T>,
     flags: Vec<u8>,
     special: Vec<u32>,
-    src: Vec<T>,
-    dst: Vec<T>,
+    /// Both population buffers in one allocation: `[first | gap | second]`, see [`buffer_gap`].
+    buffers: Vec<T>,
+    /// Start of the second buffer in `buffers`.
+    second: usize,
+    /// Whether the current (post-collision) populations are in the first buffer.
+    first_is_current: bool,
     band_rows: usize,
     steps: u64,
     coverage: Option<Coverage<T>>,
@@ -39,6 +45,7 @@ struct Coverage<T> {
     offsets: Vec<u32>,
     shares: Vec<SolidShare<T>>,
     owners: Vec<u32>,
+    share_nodes: Vec<[f64; 2]>,
     exchange: Vec<[T; 2]>,
     weighting: Weighting,
 }
@@ -90,8 +97,9 @@ impl<T: Real> FluidLattice<T> {
             params,
             flags: vec![FLUID; shape.nodes()],
             special: Vec::new(),
-            src: vec![T::zero(); len],
-            dst: vec![T::zero(); len],
+            buffers: vec![T::zero(); 2 * len + buffer_gap::<T>(len)],
+            second: len + buffer_gap::<T>(len),
+            first_is_current: true,
             band_rows: 8,
             steps: 0,
             coverage: None,
@@ -159,7 +167,7 @@ impl<T: Real> FluidLattice<T> {
                 let (rho, u) = state(x, y);
                 let f = equilibrium(rho, u);
                 for (q, fq) in f.iter().enumerate() {
-                    self.src[q * stride + n] = *fq;
+                    self.current_mut()[q * stride + n] = *fq;
                 }
             }
         }
@@ -167,40 +175,69 @@ impl<T: Real> FluidLattice<T> {
 
     /// The current (post-collision) population buffer.
     pub fn populations(&self) -> &[T] {
-        &self.src
+        let len = self.shape.buffer_len();
+        if self.first_is_current {
+            &self.buffers[..len]
+        } else {
+            &self.buffers[self.second..self.second + len]
+        }
     }
 
     /// Mutable access to the current population buffer (for initial conditions and tests).
     pub fn populations_mut(&mut self) -> &mut [T] {
-        &mut self.src
+        self.current_mut()
+    }
+
+    fn current_mut(&mut self) -> &mut [T] {
+        let len = self.shape.buffer_len();
+        if self.first_is_current {
+            &mut self.buffers[..len]
+        } else {
+            &mut self.buffers[self.second..self.second + len]
+        }
     }
 
     /// Cover the lattice with discs (exact cell fractions, several discs per cell add up, capped at 1 by the
     /// collision) using the partially-saturated collision with weighting `weighting`. Replaces any previous
-    /// coverage. Discs must lie inside the lattice (no periodic images are taken).
+    /// coverage. See [`FluidLattice::cover_with_bodies`].
+    pub fn cover_with_discs(&mut self, discs: &[FluidDisc], weighting: Weighting) {
+        let bodies: Vec<CoupledBody<f64>> = discs
+            .iter()
+            .map(|d| CoupledBody {
+                center: d.center,
+                velocity: d.velocity,
+                spin: d.spin,
+                shape: BodyShape::Disc { radius: d.radius },
+            })
+            .collect();
+        self.cover_with_bodies(&bodies, weighting);
+    }
+
+    /// Cover the lattice with rigid bodies (discs or ellipses as the fluid sees them, lattice units): exact cell
+    /// fractions from the coupling kernels, several bodies per cell add up (capped at 1 by the collision), each
+    /// share carrying the body's rigid velocity at the node. Replaces any previous coverage. Bodies must lie
+    /// inside the lattice (no periodic images are taken).
     ///
     /// Nodes on Zou–He sides are never covered: the closure re-imposes the boundary density there every step,
     /// and a fully covered (B = 1) Zou–He node leaves its rest population unrelaxed; the verification suite found
     /// such nodes diverging within a few steps on small random lattices. Solids that reach a pressure or
     /// velocity boundary are therefore seen by the fluid only inside it.
-    pub fn cover_with_discs(&mut self, discs: &[FluidDisc], weighting: Weighting) {
+    pub fn cover_with_bodies(&mut self, bodies: &[CoupledBody<f64>], weighting: Weighting) {
         let s = self.shape;
         let mut entries: Vec<(u32, u32, SolidShare<T>)> = Vec::new();
-        for (k, d) in discs.iter().enumerate() {
-            let x0 = (d.center[0] - d.radius - 1.0).floor().max(0.0) as usize;
-            let x1 = ((d.center[0] + d.radius + 1.0).ceil() as usize).min(s.nx - 1);
-            let y0 = (d.center[1] - d.radius - 1.0).floor().max(0.0) as usize;
-            let y1 = ((d.center[1] + d.radius + 1.0).ceil() as usize).min(s.ny - 1);
+        for (k, body) in bodies.iter().enumerate() {
+            let Some([x0, x1, y0, y1]) = body_cell_range(body, s.nx, s.ny) else {
+                continue;
+            };
             for y in y0..=y1 {
                 for x in x0..=x1 {
                     if self.on_zou_he_side(x, y) {
                         continue;
                     }
-                    let frac = disc_cell_fraction(d.center, d.radius, x as f64, y as f64);
+                    let (px, py) = (x as f64, y as f64);
+                    let frac = body_cell_fraction(body, px, py);
                     if frac > 0.0 {
-                        // Rigid-body velocity at the node: V + ω × (x − X).
-                        let (rx, ry) = (x as f64 - d.center[0], y as f64 - d.center[1]);
-                        let v = [d.velocity[0] - d.spin * ry, d.velocity[1] + d.spin * rx];
+                        let v = rigid_velocity(body, [px, py]);
                         let share = SolidShare {
                             fraction: T::lit(frac),
                             velocity: [T::lit(v[0]), T::lit(v[1])],
@@ -210,13 +247,14 @@ impl<T: Real> FluidLattice<T> {
                 }
             }
         }
-        // Deterministic order: by node, then by disc.
+        // Deterministic order: by node, then by body.
         entries.sort_by_key(|e| (e.0, e.1));
         let mut cov = Coverage {
             nodes: Vec::new(),
             offsets: vec![0],
             shares: Vec::with_capacity(entries.len()),
             owners: Vec::with_capacity(entries.len()),
+            share_nodes: Vec::with_capacity(entries.len()),
             exchange: vec![[T::zero(); 2]; entries.len()],
             weighting,
         };
@@ -227,8 +265,10 @@ impl<T: Real> FluidLattice<T> {
                 }
                 cov.nodes.push(node);
             }
+            let (x, y) = s.coords(node as usize);
             cov.shares.push(share);
             cov.owners.push(owner);
+            cov.share_nodes.push([x as f64, y as f64]);
         }
         cov.offsets.push(cov.shares.len() as u32);
         if cov.nodes.is_empty() {
@@ -259,16 +299,36 @@ impl<T: Real> FluidLattice<T> {
 
     /// Force on each of `count` solids from the last step (lattice units), summed in a fixed order.
     pub fn solid_forces(&self, count: usize) -> Vec<[f64; 2]> {
-        let mut out = vec![[0.0; 2]; count];
+        self.solid_forces_and_torques(&vec![[0.0; 2]; count]).0
+    }
+
+    /// Force and torque (about `centers[p]`, lattice units) on each solid from the last step (eq. 4.7–4.8),
+    /// reduced by the coupling kernel in the fixed order of the share list.
+    pub fn solid_forces_and_torques(&self, centers: &[[f64; 2]]) -> (Vec<[f64; 2]>, Vec<f64>) {
+        let mut forces = vec![[0.0; 2]; centers.len()];
+        let mut torques = vec![0.0; centers.len()];
         if let Some(c) = &self.coverage {
-            for (owner, ex) in c.owners.iter().zip(c.exchange.iter()) {
-                if let Some(f) = out.get_mut(*owner as usize) {
-                    f[0] += ex[0].to_f64_exact();
-                    f[1] += ex[1].to_f64_exact();
-                }
-            }
+            let exchange: Vec<[f64; 2]> = c
+                .exchange
+                .iter()
+                .map(|e| [e[0].to_f64_exact(), e[1].to_f64_exact()])
+                .collect();
+            let periodic = self.bc.periodic_axes();
+            let periods = [
+                periodic[0].then_some(self.shape.nx as f64),
+                periodic[1].then_some(self.shape.ny as f64),
+            ];
+            reduce_exchange(
+                &c.share_nodes,
+                &c.owners,
+                &exchange,
+                centers,
+                periods,
+                &mut forces,
+                &mut torques,
+            );
         }
-        out
+        (forces, torques)
     }
 
     /// Advance one lattice step, in parallel over row bands on the current rayon pool.
@@ -281,12 +341,21 @@ impl<T: Real> FluidLattice<T> {
         };
         let params = self.params;
         let special = &self.special;
-        let src = &self.src;
         let band_rows = self.band_rows;
         let band_len = band_rows * shape.nx;
         let bands = shape.ny.div_ceil(band_rows);
         // Split the nine destination planes into row bands.
-        let planes = planes_mut(&shape, &mut self.dst);
+        let (src, dst) = {
+            let len = shape.buffer_len();
+            let (first, rest) = self.buffers.split_at_mut(self.second);
+            let (first, second) = (&mut first[..len], &mut rest[..len]);
+            if self.first_is_current {
+                (&*first, second)
+            } else {
+                (&*second, first)
+            }
+        };
+        let planes = planes_mut(&shape, dst);
         let mut chunked: Vec<std::slice::ChunksMut<'_, T>> =
             planes.into_iter().map(|p| p.chunks_mut(band_len)).collect();
         // Split the covered nodes and their exchange buffer along the same bands.
@@ -348,7 +417,7 @@ impl<T: Real> FluidLattice<T> {
                     }
                 }
             });
-        std::mem::swap(&mut self.src, &mut self.dst);
+        self.first_is_current = !self.first_is_current;
         self.steps += 1;
     }
 
@@ -359,7 +428,7 @@ impl<T: Real> FluidLattice<T> {
         let mut u = vec![[T::zero(); 2]; n];
         gathered_moments(
             &self.shape,
-            &self.src,
+            self.populations(),
             &self.bc,
             &self.flags,
             self.params.force,
@@ -373,8 +442,8 @@ impl<T: Real> FluidLattice<T> {
     pub fn mass(&self) -> f64 {
         let mut m = 0.0;
         for q in 0..Q {
-            let plane =
-                &self.src[q * self.shape.stride..q * self.shape.stride + self.shape.nodes()];
+            let plane = &self.populations()
+                [q * self.shape.stride..q * self.shape.stride + self.shape.nodes()];
             for (v, &flag) in plane.iter().zip(self.flags.iter()) {
                 if flag != SOLID {
                     m += v.to_f64_exact();
@@ -398,4 +467,15 @@ impl<T: Real> FluidLattice<T> {
         }
         None
     }
+}
+
+/// Elements between the two population buffers, so that each plane of the second buffer starts 160 bytes (mod
+/// 4 KiB) after the same plane of the first. Planes within a buffer are 320 bytes apart (mod 4 KiB, see
+/// [`LatticeShape`]); with both buffers at the same offset, the store to plane q of the destination would hit
+/// the same 4 KiB offset as the load from plane q of the source a few elements before it ("4K aliasing": the
+/// load waits for the store). 160 bytes is as far as possible from every multiple of 320 bytes mod 4 KiB.
+fn buffer_gap<T>(len: usize) -> usize {
+    let size = std::mem::size_of::<T>().max(1);
+    let end = (len * size) % 4096;
+    (160 + 4096 - end) % 4096 / size
 }

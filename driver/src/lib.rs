@@ -7,6 +7,7 @@ pub mod channel;
 pub mod error;
 pub mod lattice;
 pub mod output;
+pub mod porous;
 pub mod run;
 pub mod scene;
 pub mod solid;

@@ -37,6 +37,9 @@ pub fn check(scene_path: &Path) -> Result<String> {
             }
             Ok(s)
         }
+        SceneKind::CylinderArray | SceneKind::PorousFlow => {
+            crate::porous::check(&scene, scene_path)
+        }
     }
 }
 
@@ -121,6 +124,9 @@ pub fn run(scene_path: &Path, out: &Path, opts: &RunOptions) -> Result<serde_jso
                 out.display()
             );
             Ok(summary)
+        }
+        SceneKind::CylinderArray | SceneKind::PorousFlow => {
+            crate::porous::run(&scene, scene_path, out, opts)
         }
     }
 }

@@ -93,6 +93,10 @@ pub enum Precision {
 pub enum SceneKind {
     /// Plane Poiseuille flow between two walls (validation of the fluid kernels).
     Channel,
+    /// Periodic square array of fixed cylinders, body-force driven (dissertation §5.4; [`crate::porous`]).
+    CylinderArray,
+    /// Fixed discs between pressure boundaries: Darcy and permeability (dissertation §5.5; [`crate::porous`]).
+    PorousFlow,
     /// A bonded dry sample between platens (no fluid); read by [`crate::solid::scene::DryScene`].
     Dry,
 }
@@ -191,6 +195,12 @@ pub struct Scene {
     /// `[channel]` (kind = "channel")
     #[serde(default)]
     pub channel: Option<ChannelSection>,
+    /// `[cylinder_array]` (kind = "cylinder_array")
+    #[serde(default)]
+    pub cylinder_array: Option<crate::porous::CylinderArraySection>,
+    /// `[porous]` (kind = "porous_flow")
+    #[serde(default)]
+    pub porous: Option<crate::porous::PorousSection>,
     /// `[run]`
     pub run: RunSection,
 }
@@ -380,6 +390,9 @@ impl Scene {
                         }
                     }
                 }
+            }
+            SceneKind::CylinderArray | SceneKind::PorousFlow => {
+                crate::porous::validate_sections(self)?
             }
         }
         Ok(())

@@ -16,6 +16,7 @@
 // `!(a > b)` is the NaN-rejecting form of a range check (a NaN fails it); the kernels use it on purpose.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
+pub mod coupling;
 pub mod coverage;
 pub mod dem;
 pub mod fluid;

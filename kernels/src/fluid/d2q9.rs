@@ -74,19 +74,33 @@ pub fn momentum<T: Real>(f: &[T; Q]) -> [T; 2] {
 }
 
 /// Second-order equilibrium f^eq(ρ, u) for all nine directions.
+///
+/// Written out per direction so that no multiplication by a zero velocity component is evaluated (the compiler
+/// may not drop `0 · u`, which is NaN for infinite u), and opposite directions share c·u, 3 c·u and 9/2 (c·u)².
+/// For finite ρ and u this is bitwise the textbook loop
+/// `w_i ρ (((1 + 3 c_i·u) + 9/2 (c_i·u)²) − 3/2 u·u)` with c_i·u = c_ix u_x + c_iy u_y evaluated left to right:
+/// `1·u = u`, `(−1)·u = −u`, `3(−a) = −(3a)`, `(9/2)(−a)(−a) = (9/2)a·a` and `a + (−b) = a − b` are exact in
+/// IEEE arithmetic, and an added `0 · u` (±0) can only flip the sign of a zero c·u, which `1 + 3 c·u` absorbs.
 #[inline(always)]
 pub fn equilibrium<T: Real>(rho: T, u: [T; 2]) -> [T; Q] {
     let w = weights::<T>();
+    let one = T::one();
     let three = T::lit(3.0);
     let four_half = T::lit(4.5);
-    let usq = T::lit(1.5) * (u[0] * u[0] + u[1] * u[1]);
-    let mut feq = [T::zero(); Q];
-    for i in 0..Q {
-        let c = VELOCITIES[i];
-        let cu = T::lit(c[0] as f64) * u[0] + T::lit(c[1] as f64) * u[1];
-        feq[i] = w[i] * rho * (T::one() + three * cu + four_half * cu * cu - usq);
-    }
-    feq
+    let [ux, uy] = u;
+    let usq = T::lit(1.5) * (ux * ux + uy * uy);
+    let (w0, w1, w5) = (w[0] * rho, w[1] * rho, w[5] * rho);
+    // For a pair of opposite directions with c·u = ±cu: (w ρ [1 + 3cu + q − usq], w ρ [1 − 3cu + q − usq]).
+    let pair = |wr: T, cu: T| {
+        let a = three * cu;
+        let q = four_half * cu * cu;
+        (wr * (((one + a) + q) - usq), wr * (((one - a) + q) - usq))
+    };
+    let (f1, f3) = pair(w1, ux);
+    let (f2, f4) = pair(w1, uy);
+    let (f5, f7) = pair(w5, ux + uy);
+    let (f8, f6) = pair(w5, ux - uy);
+    [w0 * (one - usq), f1, f2, f3, f4, f5, f6, f7, f8]
 }
 
 /// Second moment Π_ab = Σ f_i c_ia c_ib as (xx, xy, yy).

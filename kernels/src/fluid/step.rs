@@ -21,7 +21,7 @@
 //! lattice into bands for threads gives bitwise the same result for any number of threads.
 use super::boundary::{zou_he, zou_he_corner, Boundaries, SideCondition};
 use super::collide::{bgk_collide, bgk_collide_forced, psm_collide, PsmParams, SolidShare};
-use super::d2q9::{density, equilibrium, OPPOSITE, Q};
+use super::d2q9::{density, equilibrium, OPPOSITE, Q, VELOCITIES};
 use super::lattice::{wrap_row, LatticeShape, Neighbour, Side};
 use crate::Real;
 
@@ -105,9 +105,25 @@ pub fn gather_node<T: Real>(
     x: usize,
     y: usize,
 ) -> [T; Q] {
-    let periodic = bc.periodic_axes();
     let here = shape.index(x, y);
     let mut f = [T::zero(); Q];
+    if x > 0 && y > 0 && x + 1 < shape.nx && y + 1 < shape.ny {
+        // Interior node: no side is crossed (so no wrap and no Zou–He closure) and the upstream node of
+        // direction q is here − c_q; only obstacle neighbours bounce back. Same values as the general path.
+        let nx = shape.nx;
+        for (q, fq) in f.iter_mut().enumerate() {
+            let c = VELOCITIES[q];
+            // here − c_x − c_y nx, written with non-negative terms: x ≥ 1 and y ≥ 1.
+            let j = here + nx + 1 - (1 + c[0]) as usize - (1 + c[1]) as usize * nx;
+            *fq = if flags[j] == SOLID {
+                src[shape.offset(OPPOSITE[q], here)]
+            } else {
+                src[shape.offset(q, j)]
+            };
+        }
+        return f;
+    }
+    let periodic = bc.periodic_axes();
     for (q, fq) in f.iter_mut().enumerate() {
         match shape.upstream(x, y, q, periodic) {
             Neighbour::Node(j) => {
