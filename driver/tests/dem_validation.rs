@@ -14,8 +14,10 @@
 //! `-p lbdem` build, 229 → 420 (×1.83) in a workspace build (roundoff-sensitive, see the test); UCS/σ_t ≈ 2–3
 //! (the BPM's known deficiency: too strong in tension, REFERENCE §7.4).
 //!
-//! Measured (f64; `cargo test --workspace`, in brackets `cargo test -p lbdem`: the two builds differ in the last
-//! bit of sin/cos/hypot through feature unification of num-traits, which failure amplifies):
+//! Measured (f64; `cargo test --workspace`, in brackets `cargo test -p lbdem`, as first measured when the two
+//! builds differed in the last bit of sin/cos/hypot through feature unification of num-traits — failure
+//! amplifies such bits. The kernels now call `libm` through `Real::portable_*` in every build, so both builds
+//! give the same bits; the bracketed libm figures are the ones that apply):
 //! E = 9.13e4 [9.07e4] dyne/cm² at σ̄_c = 500; UCS 765.5 → 1540.8 [741.7 → 1505.8] dyne/cm² when σ̄_c, τ̄_c
 //! double, ×2.013 [×2.030]; E ×1.988 [×1.992] when every stiffness doubles (unbreakable bonds); envelope slopes
 //! dσ₁/dσ₃ = 1.29 [1.50] (μ = 0.1) and 3.09 [3.47] (μ = 1.0) between σ₃ = 25 and 150 dyne/cm.

@@ -23,7 +23,7 @@ fn half_chord_primitive<T: Real>(r: T, t: T) -> T {
     } else {
         T::zero()
     };
-    T::lit(0.5) * (t * root + r * r * ratio.asin())
+    T::lit(0.5) * (t * root + r * r * ratio.portable_asin())
 }
 
 /// Exact area of the intersection of the disc (centre `c`, radius `r`) with the axis-aligned rectangle
@@ -115,7 +115,7 @@ fn dot<T: Real>(u: [T; 2], v: [T; 2]) -> T {
 /// counter-clockwise about the origin.
 pub fn disc_triangle_signed_area<T: Real>(r: T, p: [T; 2], q: [T; 2]) -> T {
     let half = T::lit(0.5);
-    let sector = |u: [T; 2], v: [T; 2]| half * r * r * cross(u, v).atan2(dot(u, v));
+    let sector = |u: [T; 2], v: [T; 2]| half * r * r * cross(u, v).portable_atan2(dot(u, v));
     let d = [q[0] - p[0], q[1] - p[1]];
     let a = dot(d, d);
     if !(a > T::zero()) {
@@ -149,7 +149,7 @@ pub fn ellipse_rectangle_area<T: Real>(c: [T; 2], a: T, b: T, theta: T, rect: [T
     if x0 > c[0] + reach || x1 < c[0] - reach || y0 > c[1] + reach || y1 < c[1] - reach {
         return T::zero();
     }
-    let (sin, cos) = theta.sin_cos();
+    let (sin, cos) = theta.portable_sin_cos();
     // Rectangle corners, counter-clockwise, mapped to the unit-disc frame (the map has positive determinant, so
     // the orientation is kept).
     let map = |x: T, y: T| {

@@ -1,9 +1,14 @@
 //! The floating-point abstraction every kernel is generic over.
 //!
-//! `Real` is [`num_traits::Float`] (with `libm` behind it, so it works without `std`) plus the compound
-//! assignment operators and a lossless-enough conversion from `f64` literals. Only IEEE-754 correctly rounded
-//! operations (+, −, ×, ÷, sqrt) and software `libm` functions are used, so results are identical on every
-//! platform and independent of the thread count.
+//! `Real` is [`num_traits::Float`] plus the compound assignment operators and a conversion from `f64`
+//! literals. Only IEEE-754 correctly rounded operations (+, −, ×, ÷, sqrt) and the software `libm` crate are
+//! used, so results are identical on every platform, in every build, and for any thread count.
+//!
+//! **Transcendental functions go through the `portable_*` methods below, never through `Float::sin` & co.**
+//! `num_traits::Float` forwards those to the platform's C library when any crate in the build enables
+//! num-traits' `std` feature (criterion and proptest do), and to the `libm` crate otherwise, so the same
+//! kernel could give different last bits in a workspace build and a single-crate build. The portable methods
+//! always call `libm`. `clippy.toml` disallows the `Float` versions.
 use core::fmt::Debug;
 use core::iter::Sum;
 use core::ops::{AddAssign, DivAssign, MulAssign, SubAssign};
@@ -29,6 +34,22 @@ pub trait Real:
     fn lit(x: f64) -> Self;
     /// Widen to `f64` (exact for both precisions).
     fn to_f64_exact(self) -> f64;
+    /// sin, from the `libm` crate (the same bits in every build).
+    fn portable_sin(self) -> Self;
+    /// cos, from the `libm` crate.
+    fn portable_cos(self) -> Self;
+    /// (sin, cos), from the `libm` crate.
+    fn portable_sin_cos(self) -> (Self, Self) {
+        (self.portable_sin(), self.portable_cos())
+    }
+    /// atan2(self, x), from the `libm` crate.
+    fn portable_atan2(self, x: Self) -> Self;
+    /// asin, from the `libm` crate.
+    fn portable_asin(self) -> Self;
+    /// hypot(self, y), from the `libm` crate.
+    fn portable_hypot(self, y: Self) -> Self;
+    /// Natural logarithm, from the `libm` crate.
+    fn portable_ln(self) -> Self;
 }
 
 impl Real for f64 {
@@ -41,6 +62,30 @@ impl Real for f64 {
     fn to_f64_exact(self) -> f64 {
         self
     }
+    #[inline]
+    fn portable_sin(self) -> Self {
+        libm::sin(self)
+    }
+    #[inline]
+    fn portable_cos(self) -> Self {
+        libm::cos(self)
+    }
+    #[inline]
+    fn portable_atan2(self, x: Self) -> Self {
+        libm::atan2(self, x)
+    }
+    #[inline]
+    fn portable_asin(self) -> Self {
+        libm::asin(self)
+    }
+    #[inline]
+    fn portable_hypot(self, y: Self) -> Self {
+        libm::hypot(self, y)
+    }
+    #[inline]
+    fn portable_ln(self) -> Self {
+        libm::log(self)
+    }
 }
 
 impl Real for f32 {
@@ -52,5 +97,29 @@ impl Real for f32 {
     #[inline(always)]
     fn to_f64_exact(self) -> f64 {
         self as f64
+    }
+    #[inline]
+    fn portable_sin(self) -> Self {
+        libm::sinf(self)
+    }
+    #[inline]
+    fn portable_cos(self) -> Self {
+        libm::cosf(self)
+    }
+    #[inline]
+    fn portable_atan2(self, x: Self) -> Self {
+        libm::atan2f(self, x)
+    }
+    #[inline]
+    fn portable_asin(self) -> Self {
+        libm::asinf(self)
+    }
+    #[inline]
+    fn portable_hypot(self, y: Self) -> Self {
+        libm::hypotf(self, y)
+    }
+    #[inline]
+    fn portable_ln(self) -> Self {
+        libm::logf(self)
     }
 }

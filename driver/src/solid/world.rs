@@ -430,7 +430,7 @@ impl<T: Real> DemWorld<T> {
                         pj.position[0] - pi.position[0],
                         pj.position[1] - pi.position[1],
                     ];
-                    let len = d[0].hypot(d[1]);
+                    let len = d[0].portable_hypot(d[1]);
                     let n = if len > T::zero() {
                         [d[0] / len, d[1] / len]
                     } else {
@@ -773,7 +773,7 @@ impl<T: Real> DemWorld<T> {
         let s = self
             .force
             .iter()
-            .fold(T::zero(), |a, f| a + f[0].hypot(f[1]));
+            .fold(T::zero(), |a, f| a + f[0].portable_hypot(f[1]));
         (s / T::lit(self.force.len() as f64))
             / (self.contact_normal_sum / T::lit(self.active_contacts as f64))
     }

@@ -132,7 +132,7 @@ impl<T: Real> PointBond<T> {
         let (pi, pj) = self.material_points(i, j);
         let mean =
             T::lit(0.5) * ((i.angle - self.rest_angles[0]) + (j.angle - self.rest_angles[1]));
-        let (c, s) = (mean.cos(), mean.sin());
+        let (c, s) = (mean.portable_cos(), mean.portable_sin());
         let rot = |v: [T; 2]| [c * v[0] - s * v[1], s * v[0] + c * v[1]];
         (sub(sub(pj, pi), rot(self.rest_gap)), rot(self.rest_normal))
     }
@@ -165,7 +165,7 @@ pub fn point_bond_force<T: Real>(
         };
         return BondForce::zero(Some(BondBreak {
             mode,
-            orientation: n[1].atan2(n[0]),
+            orientation: n[1].portable_atan2(n[0]),
             position: x,
             load: magnitude,
         }));
@@ -298,7 +298,7 @@ pub fn parallel_bond_force<T: Real>(
         bond.moment = T::zero();
         return BondForce::zero(Some(BondBreak {
             mode,
-            orientation: n[1].atan2(n[0]),
+            orientation: n[1].portable_atan2(n[0]),
             position: x,
             load,
         }));

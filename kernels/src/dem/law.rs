@@ -78,7 +78,7 @@ pub fn damping_ratio_from_restitution<T: Real>(restitution: T) -> T {
     if restitution.is_nan() || restitution <= T::zero() {
         return T::one();
     }
-    let l = restitution.ln();
+    let l = restitution.portable_ln();
     -l / (T::PI() * T::PI() + l * l).sqrt()
 }
 

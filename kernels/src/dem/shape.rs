@@ -162,8 +162,8 @@ impl<T: Real> Placed<T> {
             centre,
             a,
             b,
-            cos: angle.cos(),
-            sin: angle.sin(),
+            cos: angle.portable_cos(),
+            sin: angle.portable_sin(),
         }
     }
 
@@ -231,7 +231,7 @@ impl<T: Real> Wall<T> {
     pub fn from_angle(point: [T; 2], angle: T) -> Self {
         Wall {
             point,
-            normal: [angle.cos(), angle.sin()],
+            normal: [angle.portable_cos(), angle.portable_sin()],
         }
     }
 
@@ -264,7 +264,7 @@ impl<T: Real> WallSegment<T> {
     /// (0, 1) and length 0.
     pub fn wall(&self) -> (Wall<T>, T) {
         let e = [self.end[0] - self.start[0], self.end[1] - self.start[1]];
-        let length = e[0].hypot(e[1]);
+        let length = e[0].portable_hypot(e[1]);
         let normal = if length > T::zero() {
             [-e[1] / length, e[0] / length]
         } else {

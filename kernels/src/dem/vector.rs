@@ -49,13 +49,13 @@ pub fn spin<T: Real>(omega: T, r: [T; 2]) -> [T; 2] {
 /// Euclidean length (with `hypot`, so no overflow for large components).
 #[inline(always)]
 pub fn norm<T: Real>(a: [T; 2]) -> T {
-    a[0].hypot(a[1])
+    a[0].portable_hypot(a[1])
 }
 
 /// The unit vector at angle θ: (cos θ, sin θ).
 #[inline(always)]
 pub fn unit<T: Real>(theta: T) -> [T; 2] {
-    [theta.cos(), theta.sin()]
+    [theta.portable_cos(), theta.portable_sin()]
 }
 
 /// Rotate `a` counter-clockwise by the angle whose cosine and sine are given.
@@ -67,5 +67,5 @@ pub fn rotate_cs<T: Real>(a: [T; 2], c: T, s: T) -> [T; 2] {
 /// Rotate `a` counter-clockwise by `angle`.
 #[inline(always)]
 pub fn rotate<T: Real>(a: [T; 2], angle: T) -> [T; 2] {
-    rotate_cs(a, angle.cos(), angle.sin())
+    rotate_cs(a, angle.portable_cos(), angle.portable_sin())
 }
