@@ -9,8 +9,8 @@
 //! σ̄_c = τ̄_c = 500 dyne/cm², local damping 0.7, platens at 0.02 cm/s each (axial strain rate 0.01/s; halving it
 //! changed the peak by 1.3 %, measured). One packing (seed 1) is shared by every test. Total ≈ 30 s.
 //!
-//! Direct tension by stress control through the boundary particles (the fracture test's loading path) stands
-//! in for the Brazilian test (not implemented): σ_t 371 → 778.5 dyne/cm² when σ̄_c, τ̄_c double (×2.10) in a
+//! Direct tension by stress control through the boundary particles (the fracture test's loading path; the
+//! Brazilian test itself is in `dem_brazilian.rs`): σ_t 371 → 778.5 dyne/cm² when σ̄_c, τ̄_c double (×2.10) in a
 //! `-p lbdem` build, 229 → 420 (×1.83) in a workspace build (roundoff-sensitive, see the test); UCS/σ_t ≈ 2–3
 //! (the BPM's known deficiency: too strong in tension, REFERENCE §7.4).
 //!

@@ -276,3 +276,150 @@ pub fn run_boundary_stress<T: Real>(
     }
     curve
 }
+
+/// Parameters of a Brazilian (diametral compression) test of a bonded disc (REFERENCE §7.4): two flat rigid
+/// platens, below and above the disc, move towards each other at a constant speed.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BrazilianTest<T> {
+    /// Disc diameter D used in σ_t = 2P/(πD) (unit thickness).
+    pub diameter: T,
+    /// Speed of each platen (length/time; the closure rate is twice it).
+    pub platen_speed: T,
+    /// Steps without platens before loading (the carved disc releases the packing's installed stress).
+    pub settle_steps: u64,
+    /// Stop when the platen closure exceeds this.
+    pub max_closure: T,
+    /// Stop once the load falls below this fraction of the peak after the peak (with bonds broken).
+    pub post_peak_fraction: T,
+    /// Steps between recorded points.
+    pub record_interval: u64,
+}
+
+/// One recorded point of a Brazilian test.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BrazilianPoint {
+    /// World step.
+    pub step: u64,
+    /// Platen closure (decrease of the platen distance since the start of loading).
+    pub closure: f64,
+    /// Diametral load P: mean of the two platens' normal forces (compression positive, per unit thickness).
+    pub load: f64,
+    /// Bonds broken so far.
+    pub broken_bonds: usize,
+}
+
+/// What a Brazilian test measured.
+#[derive(Clone, Debug, PartialEq)]
+pub struct BrazilianResult {
+    /// The load–closure record.
+    pub curve: Vec<BrazilianPoint>,
+    /// Peak load P.
+    pub peak_load: f64,
+    /// Index of the peak in `curve`.
+    pub peak_index: usize,
+    /// Tensile strength σ_t = 2P/(πD).
+    pub tensile_strength: f64,
+    /// Steps of the loading stage.
+    pub steps: u64,
+}
+
+/// Keep the particles of a packing whose bounding circles lie inside the circle of diameter `diameter`
+/// centred in the sample box, in a new world (same contact model and step, no platens), and bond the touching
+/// pairs.
+pub fn carve_disc<T: Real>(
+    packing: &Packing<T>,
+    diameter: T,
+    bonds: super::world::BondSpec<T>,
+    bond_gap: T,
+) -> crate::error::Result<DemWorld<T>> {
+    let b = packing.sample_box;
+    let w = &packing.world;
+    let half = T::lit(0.5);
+    let centre = [
+        half * (w.platens[b.left].wall.point[0] + w.platens[b.right].wall.point[0]),
+        half * (w.platens[b.bottom].wall.point[1] + w.platens[b.top].wall.point[1]),
+    ];
+    let particles: Vec<_> = w
+        .particles
+        .iter()
+        .filter(|p| {
+            let d = [p.position[0] - centre[0], p.position[1] - centre[1]];
+            d[0].portable_hypot(d[1]) + p.shape.bounding_radius() <= half * diameter
+        })
+        .map(|p| {
+            let mut p = *p;
+            p.velocity = [T::zero(); 2];
+            p.angular_velocity = T::zero();
+            p.acceleration = [T::zero(); 2];
+            p.angular_acceleration = T::zero();
+            p
+        })
+        .collect();
+    let mut world = DemWorld::new(particles, w.model, w.timestep())?;
+    world.local_damping = w.local_damping;
+    world.bond_touching_pairs(bonds, bond_gap)?;
+    Ok(world)
+}
+
+/// Run a Brazilian test on a bonded disc without platens (the world is advanced in place): settle, add a
+/// bottom and a top platen touching the disc, move them together at `platen_speed` each, and record the load.
+pub fn run_brazilian<T: Real>(
+    world: &mut DemWorld<T>,
+    test: &BrazilianTest<T>,
+    mut on_record: impl FnMut(&DemWorld<T>, &BrazilianPoint),
+) -> BrazilianResult {
+    for _ in 0..test.settle_steps {
+        world.step();
+    }
+    let (lo, hi) = world.bounds();
+    let width = hi[0] - lo[0];
+    let (o, l) = (T::zero(), T::one());
+    let fixed = PlatenControl::Speed(T::zero());
+    let bottom = world.add_platen(super::world::Platen::new(lo, [o, l], width, fixed));
+    let top = world.add_platen(super::world::Platen::new(hi, [o, -l], width, fixed));
+    world.platens[bottom].control = PlatenControl::Speed(test.platen_speed);
+    world.platens[top].control = PlatenControl::Speed(test.platen_speed);
+    let gap = |w: &DemWorld<T>| {
+        (w.platens[top].wall.point[1] - w.platens[bottom].wall.point[1]).to_f64_exact()
+    };
+    let normal_force =
+        |w: &DemWorld<T>, k: usize| (w.platens[k].stress() * w.platens[k].length).to_f64_exact();
+    let h0 = gap(world);
+    let start_step = world.step_count();
+    let interval = test.record_interval.max(1);
+    let mut curve: Vec<BrazilianPoint> = Vec::new();
+    let mut peak = f64::NEG_INFINITY;
+    let mut peak_index = 0;
+    loop {
+        for _ in 0..interval {
+            world.step();
+        }
+        let load = 0.5 * (normal_force(world, bottom) + normal_force(world, top));
+        let point = BrazilianPoint {
+            step: world.step_count(),
+            closure: h0 - gap(world),
+            load,
+            broken_bonds: world.breaks.len(),
+        };
+        on_record(world, &point);
+        curve.push(point);
+        if load > peak {
+            peak = load;
+            peak_index = curve.len() - 1;
+        }
+        let failed = curve.len() - 1 > peak_index
+            && !world.breaks.is_empty()
+            && peak > 0.0
+            && load < test.post_peak_fraction.to_f64_exact() * peak;
+        if failed || point.closure > test.max_closure.to_f64_exact() || !load.is_finite() {
+            break;
+        }
+    }
+    BrazilianResult {
+        tensile_strength: 2.0 * peak / (std::f64::consts::PI * test.diameter.to_f64_exact()),
+        peak_load: peak,
+        peak_index,
+        steps: world.step_count() - start_step,
+        curve,
+    }
+}

@@ -10,7 +10,7 @@
 //! * [`packing`]: seeded fill-and-expand packing to an isotropic stress, then bonding (point or parallel bonds);
 //!   a regular hexagonal packing for benchmarks and snapshots.
 //! * [`loading`]: uniaxial and biaxial (servo-confined) compression at a constant platen speed, with the
-//!   stress–strain record, Young's modulus and peak strength.
+//!   stress–strain record, Young's modulus and peak strength; the Brazilian test of a carved bonded disc.
 //! * [`vtk`]: legacy VTK particle output (and a parser for tests).
 //! * [`scene`]: the `kind = "dry"` scene (`[packing]`, `[solid]`, `[loading]`) and its run.
 //!
@@ -23,8 +23,8 @@ pub mod vtk;
 pub mod world;
 
 pub use loading::{
-    run_boundary_stress, run_compression, BoundaryStressTest, CompressionResult, CompressionTest,
-    CurvePoint,
+    carve_disc, run_boundary_stress, run_brazilian, run_compression, BoundaryStressTest,
+    BrazilianPoint, BrazilianResult, BrazilianTest, CompressionResult, CompressionTest, CurvePoint,
 };
 pub use packing::{boxed_sample, generate_packing, hexagonal_packing, Packing, PackingSpec};
 pub use world::{Bond, BondLaw, BondSpec, BreakRecord, DemWorld, Platen, PlatenControl, SampleBox};
