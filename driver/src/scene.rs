@@ -205,7 +205,8 @@ pub struct Scene {
     pub run: RunSection,
 }
 
-fn positive(field: &str, v: f64, hint: &str) -> Result<()> {
+/// Check that a scene value is finite and > 0, naming the field and giving a hint otherwise.
+pub(crate) fn positive(field: &str, v: f64, hint: &str) -> Result<()> {
     if v.is_finite() && v > 0.0 {
         Ok(())
     } else {

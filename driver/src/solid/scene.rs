@@ -53,7 +53,7 @@ use super::vtk::particles_vtk;
 use super::world::{BondSpec, DemWorld, CRITICAL_STEP_SAFETY};
 use crate::error::{LbdemError, Result};
 use crate::output::{csv, prepare_dir, write_atomic};
-use crate::scene::{Precision, SceneHeader, SceneKind};
+use crate::scene::{positive, Precision, SceneHeader, SceneKind};
 
 /// `[packing]`: the box, the size distribution and the isotropic stress (see [`PackingSpec`]).
 #[derive(Clone, Debug, Deserialize, Serialize)]
@@ -266,19 +266,6 @@ struct KindOnly {
 #[derive(Deserialize)]
 struct KindHeader {
     kind: SceneKind,
-}
-
-fn positive(field: &str, v: f64, hint: &str) -> Result<()> {
-    if v.is_finite() && v > 0.0 {
-        Ok(())
-    } else {
-        Err(LbdemError::field(
-            field,
-            v,
-            "must be a finite number > 0",
-            hint,
-        ))
-    }
 }
 
 fn non_negative(field: &str, v: f64, hint: &str) -> Result<()> {
