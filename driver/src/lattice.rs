@@ -453,6 +453,27 @@ impl<T: Real> FluidLattice<T> {
         m
     }
 
+    /// Total fluid momentum Σ f_i c_i over fluid nodes (post-collision populations), in f64, lattice units.
+    pub fn momentum(&self) -> [f64; 2] {
+        let mut j = [0.0; 2];
+        for (q, c) in lbdem_kernels::fluid::d2q9::VELOCITIES.iter().enumerate() {
+            if c[0] == 0 && c[1] == 0 {
+                continue;
+            }
+            let plane = &self.populations()
+                [q * self.shape.stride..q * self.shape.stride + self.shape.nodes()];
+            let mut sum = 0.0;
+            for (v, &flag) in plane.iter().zip(self.flags.iter()) {
+                if flag != SOLID {
+                    sum += v.to_f64_exact();
+                }
+            }
+            j[0] += c[0] as f64 * sum;
+            j[1] += c[1] as f64 * sum;
+        }
+        j
+    }
+
     /// First non-finite or out-of-band density, as (node, value), checking densities in [lo, hi].
     pub fn health_check(&self, lo: f64, hi: f64) -> Option<(usize, f64)> {
         let (rho, u) = self.moments();

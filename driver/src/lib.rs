@@ -4,6 +4,7 @@
 //! place ([`units`]), runs the kernels of `lbdem-kernels`, and writes outputs.
 
 pub mod channel;
+pub mod coupled;
 pub mod error;
 pub mod lattice;
 pub mod output;

@@ -226,6 +226,8 @@ pub struct DemWorld<T> {
     pub gravity: [T; 2],
     /// Applied force per particle (e.g. the axial stress through boundary particles).
     pub external_force: Vec<[T; 2]>,
+    /// Applied torque on each particle (e.g. the fluid torque of the coupling, eq. 4.8), added every step.
+    pub external_torque: Vec<T>,
     /// Particles held in place (not integrated: zero velocity, fixed position and angle), e.g. supports.
     pub held: Vec<bool>,
     /// Every bond break so far, in order.
@@ -283,6 +285,7 @@ impl<T: Real> DemWorld<T> {
             local_damping: T::lit(lbdem_kernels::dem::law::DEFAULT_LOCAL_DAMPING),
             gravity: [T::zero(); 2],
             external_force: vec![[T::zero(); 2]; n],
+            external_torque: vec![T::zero(); n],
             held: vec![false; n],
             breaks: Vec::new(),
             margin: T::zero(),
@@ -710,6 +713,9 @@ impl<T: Real> DemWorld<T> {
         }
         for (f, e) in self.force.iter_mut().zip(&self.external_force) {
             add_to(f, *e);
+        }
+        for (t, e) in self.torque.iter_mut().zip(&self.external_torque) {
+            *t += *e;
         }
 
         // Integrate (independent per particle); held particles stay where they are.
