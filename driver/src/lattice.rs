@@ -292,6 +292,20 @@ impl<T: Real> FluidLattice<T> {
         self.solid_operator = op;
     }
 
+    /// Solid fraction ε of every node (row-major) from the current coverage: the fractions of the bodies covering
+    /// a node added and capped at 1, as the collision uses them (0 for uncovered nodes, including Zou–He nodes).
+    pub fn solid_fraction_map(&self) -> Vec<f64> {
+        let mut eps = vec![0.0; self.shape.nodes()];
+        if let Some(c) = &self.coverage {
+            for (k, &node) in c.nodes.iter().enumerate() {
+                let shares = &c.shares[c.offsets[k] as usize..c.offsets[k + 1] as usize];
+                let sum: f64 = shares.iter().map(|s| s.fraction.to_f64_exact()).sum();
+                eps[node as usize] = sum.min(1.0);
+            }
+        }
+        eps
+    }
+
     /// Number of nodes covered (partly or wholly) by solids.
     pub fn covered_nodes(&self) -> usize {
         self.coverage.as_ref().map_or(0, |c| c.nodes.len())

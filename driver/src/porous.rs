@@ -36,11 +36,12 @@
 use std::path::Path;
 use std::time::Instant;
 
-use lbdem_kernels::coverage::disc_cell_fraction;
 use lbdem_kernels::fluid::boundary::{Boundaries, SideCondition};
 use lbdem_kernels::fluid::collide::{SolidOperator, Weighting};
 use lbdem_kernels::fluid::step::FluidParams;
 use lbdem_kernels::Real;
+use rand::{RngExt, SeedableRng};
+use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 use serde_json::json;
 
@@ -171,28 +172,6 @@ impl Steadiness {
 }
 
 /// Per-node solid fraction of a set of discs, capped at 1, with the same exact cell fractions the lattice uses.
-fn solid_fraction_map(nx: usize, ny: usize, discs: &[FluidDisc], skip_x: &[usize]) -> Vec<f64> {
-    let mut eps = vec![0.0; nx * ny];
-    for d in discs {
-        let x0 = (d.center[0] - d.radius - 1.0).floor().max(0.0) as usize;
-        let x1 = ((d.center[0] + d.radius + 1.0).ceil() as usize).min(nx - 1);
-        let y0 = (d.center[1] - d.radius - 1.0).floor().max(0.0) as usize;
-        let y1 = ((d.center[1] + d.radius + 1.0).ceil() as usize).min(ny - 1);
-        for y in y0..=y1 {
-            for x in x0..=x1 {
-                if skip_x.contains(&x) {
-                    continue;
-                }
-                eps[y * nx + x] += disc_cell_fraction(d.center, d.radius, x as f64, y as f64);
-            }
-        }
-    }
-    for e in &mut eps {
-        *e = e.min(1.0);
-    }
-    eps
-}
-
 fn max_mach<T: Real>(u: &[[T; 2]]) -> f64 {
     u.iter()
         .map(|v| (v[0].to_f64_exact().powi(2) + v[1].to_f64_exact().powi(2)).sqrt() * 3f64.sqrt())
@@ -361,7 +340,7 @@ pub fn solve_array<T: Real>(case: &ArrayCase) -> Result<ArrayOutcome> {
         spin: 0.0,
     };
     lattice.cover_with_discs(&[disc], Weighting::NobleTorczynski);
-    let eps = solid_fraction_map(l, l, &[disc], &[]);
+    let eps = lattice.solid_fraction_map();
     let superficial = |u: &[[T; 2]]| -> f64 {
         u.iter()
             .zip(eps.iter())
@@ -379,15 +358,10 @@ pub fn solve_array<T: Real>(case: &ArrayCase) -> Result<ArrayOutcome> {
         for _ in 0..case.check_interval.max(1) {
             lattice.step();
         }
-        let (rho, u) = lattice.moments();
-        if let Some((n, r)) = rho
-            .iter()
-            .map(|r| r.to_f64_exact())
-            .enumerate()
-            .find(|(_, r)| !(r.is_finite() && *r > 0.5 && *r < 1.5))
-        {
+        if let Some((n, r)) = lattice.health_check(0.5, 1.5) {
             return Err(diverged(&lattice, n, r, "cylinder array"));
         }
+        let (_, u) = lattice.moments();
         u_s = superficial(&u);
         if let Some(d) = steadiness.update(u_s, case.steady_tolerance) {
             drift = d / case.check_interval.max(1) as f64;
@@ -503,15 +477,15 @@ impl PorousCase {
     pub fn discs(&self) -> Vec<FluidDisc> {
         let l = self.pitch as f64;
         let half_gap = 0.5 * (l - self.diameter);
-        let mut rng = SplitMix64(self.seed);
+        let mut rng = ChaCha8Rng::seed_from_u64(self.seed);
         let x0 = self.array_start() as f64 - 0.5;
         let mut out = Vec::with_capacity(self.rows * self.columns);
         for j in 0..self.rows {
             for i in 0..self.columns {
                 let (dx, dy) = if self.jitter > 0.0 {
                     (
-                        self.jitter * half_gap * rng.symmetric(),
-                        self.jitter * half_gap * rng.symmetric(),
+                        self.jitter * half_gap * rng.random_range(-1.0..1.0),
+                        self.jitter * half_gap * rng.random_range(-1.0..1.0),
                     )
                 } else {
                     (0.0, 0.0)
@@ -553,24 +527,6 @@ impl PorousCase {
             }
         }
         gap
-    }
-}
-
-/// A tiny deterministic generator for the jitter (SplitMix64, Steele, Lea & Flood 2014).
-struct SplitMix64(u64);
-
-impl SplitMix64 {
-    fn next(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-
-    /// Uniform in [−1, 1).
-    fn symmetric(&mut self) -> f64 {
-        2.0 * ((self.next() >> 11) as f64 / (1u64 << 53) as f64) - 1.0
     }
 }
 
@@ -646,7 +602,7 @@ pub fn solve_porous<T: Real>(case: &PorousCase) -> Result<PorousOutcome> {
     lattice.set_band_rows(ny.div_ceil(2).max(1));
     let discs = case.discs();
     lattice.cover_with_discs(&discs, Weighting::NobleTorczynski);
-    let eps = solid_fraction_map(nx, ny, &discs, &[0, nx - 1]);
+    let eps = lattice.solid_fraction_map();
     // Start from the linear pressure profile at rest (shortens the pressure-diffusion transient).
     lattice.fill_equilibrium(|x, _| {
         let t = x as f64 / (nx - 1) as f64;
