@@ -67,7 +67,9 @@ fn drag_rows(
             } else {
                 "—"
             };
-            let tol = if asserted {
+            let tol = if asserted && op == SolidOperatorChoice::MovingWall {
+                "≤ 2.5 % (asserted)".to_string()
+            } else if asserted {
                 format!("{class} (asserted)")
             } else {
                 format!("§1.5 class {class}")
@@ -75,6 +77,7 @@ fn drag_rows(
             let opname = match op {
                 SolidOperatorChoice::BounceBack => "Ω₁",
                 SolidOperatorChoice::Superposition => "Ω₂",
+                SolidOperatorChoice::MovingWall => "Ω₃",
             };
             match solve_array::<f64>(&case) {
                 Ok(r) => println!(
@@ -164,6 +167,13 @@ fn main() {
     // Fast cases: exactly those of driver/tests/porous.rs.
     let bb = SolidOperatorChoice::BounceBack;
     drag_rows(&[20, 40], &[0.2, 0.4], 0.8, bb, true);
+    drag_rows(
+        &[20, 40],
+        &[0.2, 0.4],
+        0.8,
+        SolidOperatorChoice::MovingWall,
+        true,
+    );
     reynolds_rows(40, &[0.01, 1.0, 10.0], 0.011, 0.6);
     let d = diameter(24, 0.4);
     let runs: Vec<_> = [0.5e-3, 1e-3, 2e-3, 4e-3]

@@ -124,15 +124,19 @@ pub enum SolidOperatorChoice {
     /// Ω₁, non-equilibrium bounce-back (the dissertation's eq. 4.6).
     #[default]
     BounceBack,
-    /// Ω₂, superposition (needed for long runs with pressure boundaries).
+    /// Ω₂, superposition (bounded in open systems, but leaky).
     Superposition,
+    /// Ω₃ (Owen et al. 2011 eq. 33), moving-wall bounce-back at full cover: bounded and tight.
+    MovingWall,
 }
 
 impl SolidOperatorChoice {
-    fn kernel(self) -> SolidOperator {
+    /// The kernel's operator.
+    pub fn kernel(self) -> SolidOperator {
         match self {
             Self::BounceBack => SolidOperator::NonEquilibriumBounceBack,
             Self::Superposition => SolidOperator::Superposition,
+            Self::MovingWall => SolidOperator::BounceBack,
         }
     }
 }

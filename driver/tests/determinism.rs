@@ -163,7 +163,7 @@ fn open_channel_with_disc(op: SolidOperator, steps: usize) -> (f64, f64, f64) {
 }
 
 #[test]
-fn nt_operator_accumulates_mass_inside_solids_of_open_systems_and_superposition_does_not() {
+fn nt_operator_accumulates_mass_inside_solids_of_open_systems_and_the_other_two_do_not() {
     // Ω₁ (eq. 4.6) at B = 1 adds (2/3)ρu² to the rest population every step and never relaxes it: in an open
     // channel the rest population of a fully covered node grows linearly (measured: 0.444 → 0.59 in 20 000
     // steps). This characterises the dissertation's operator; if it stops drifting, the kernel changed.
@@ -186,5 +186,15 @@ fn nt_operator_accumulates_mass_inside_solids_of_open_systems_and_superposition_
     assert!(
         (f0b - 4.0 / 9.0).abs() < 0.01,
         "Ω₂: rest population {f0b} should stay near 4/9"
+    );
+    // Ω₃ never touches the rest population at full cover, and is bounce-back there: bounded and tight.
+    let (mc, md, f0c) = open_channel_with_disc(SolidOperator::BounceBack, 10_000);
+    assert!(
+        ((md - mc) / mc).abs() < 1e-6,
+        "Ω₃: mass still changing {mc} -> {md}"
+    );
+    assert!(
+        (f0c - 4.0 / 9.0).abs() < 0.01,
+        "Ω₃: rest population {f0c} should stay near 4/9"
     );
 }

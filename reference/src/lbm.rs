@@ -174,17 +174,33 @@ pub fn psm(
     force: [f64; 2],
     solids: &[Solid],
 ) -> (Populations, Vec<[f64; 2]>) {
-    psm_with_operator(f, tau, kind, false, force, solids)
+    psm_with_operator(
+        f,
+        tau,
+        kind,
+        SolidOp::NonEquilibriumBounceBack,
+        force,
+        solids,
+    )
 }
 
-/// As [`psm`], with the solid operator chosen: `superposition = false` is Ω₁ (non-equilibrium bounce-back,
-/// Ω_i = f_ī − f_ī^eq(ρ,u) + f_i^eq(ρ,u_s) − f_i), `true` is Ω₂ (Holdych's superposition,
-/// Ω_i = f_i^eq(ρ,u_s) − f_i + (1 − 1/τ)(f_i − f_i^eq(ρ,u))).
+/// The solid collision operator Ω^S (Owen, Leonardi & Feng 2011 numbering).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SolidOp {
+    /// Ω₁: f_ī − f_ī^eq(ρ,u) + f_i^eq(ρ,u_s) − f_i (Noble–Torczynski, dissertation eq. 4.6).
+    NonEquilibriumBounceBack,
+    /// Ω₂: f_i^eq(ρ,u_s) − f_i + (1 − 1/τ)(f_i − f_i^eq(ρ,u)) (Holdych's superposition).
+    Superposition,
+    /// Ω₃: f_ī − f_ī^eq(ρ,u_s) + f_i^eq(ρ,u_s) − f_i (Owen et al. eq. 33).
+    BounceBack,
+}
+
+/// As [`psm`], with the solid operator chosen (see [`SolidOp`]).
 pub fn psm_with_operator(
     f: &Populations,
     tau: f64,
     kind: Weighting,
-    superposition: bool,
+    op: SolidOp,
     force: [f64; 2],
     solids: &[Solid],
 ) -> (Populations, Vec<[f64; 2]>) {
@@ -207,10 +223,10 @@ pub fn psm_with_operator(
         let mut given_to_fluid = [0.0; 2];
         for i in 0..Q {
             let o = OPPOSITE[i];
-            let omega_s = if superposition {
-                feq_s[i] - f[i] + (1.0 - 1.0 / tau) * (f[i] - feq[i])
-            } else {
-                f[o] - feq[o] + feq_s[i] - f[i]
+            let omega_s = match op {
+                SolidOp::Superposition => feq_s[i] - f[i] + (1.0 - 1.0 / tau) * (f[i] - feq[i]),
+                SolidOp::NonEquilibriumBounceBack => f[o] - feq[o] + feq_s[i] - f[i],
+                SolidOp::BounceBack => f[o] - feq_s[o] + feq_s[i] - f[i],
             };
             out[i] += b_s * omega_s;
             given_to_fluid[0] += b_s * omega_s * c(i)[0];

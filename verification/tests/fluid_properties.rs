@@ -222,14 +222,19 @@ proptest! {
 
     /// PSM conserves mass; the fluid momentum change is (1 − B) F minus the momentum handed to the solids
     /// (Σ exchange), so with no body force momentum is exchanged, never created. Equals the reference,
-    /// exchange included. Both solid operators (Ω₁ non-equilibrium bounce-back, Ω₂ superposition).
+    /// exchange included. All three solid operators (Ω₁ non-equilibrium bounce-back, Ω₂ superposition, Ω₃
+    /// moving-wall bounce-back).
     #[test]
     fn psm_exchanges_momentum_with_the_solids(
         f in node_populations(), tau in tau(), shares in shares(), w in weighting(),
-        forced in any::<bool>(), force in force(), superposition in any::<bool>(),
+        forced in any::<bool>(), force in force(), op in 0usize..3,
     ) {
         let force = if forced { force } else { [0.0; 2] };
-        let solid = if superposition { SolidOperator::Superposition } else { SolidOperator::NonEquilibriumBounceBack };
+        let (solid, ref_op) = [
+            (SolidOperator::NonEquilibriumBounceBack, reference::SolidOp::NonEquilibriumBounceBack),
+            (SolidOperator::Superposition, reference::SolidOp::Superposition),
+            (SolidOperator::BounceBack, reference::SolidOp::BounceBack),
+        ][op];
         let params = PsmParams { tau, weighting: w, force, solid };
         let mut g = f;
         let mut exchange = vec![[f64::NAN; 2]; shares.len()];
@@ -244,19 +249,21 @@ proptest! {
             prop_assert!((j1[a] - j0[a] - expected).abs() <= tol, "axis {a}");
         }
         if !forced {
-            // REFERENCE.md §2.2–2.3: with Ω₁ or Ω₂ and no forcing, F_s = B_s ρ (u − u_s) for any populations.
+            // REFERENCE.md §2.2–2.3: with Ω₁ or Ω₂ and no forcing, F_s = B_s ρ (u − u_s) for any populations;
+            // Ω₃ hands over twice that.
+            let factor = if solid == SolidOperator::BounceBack { 2.0 } else { 1.0 };
             let (rho, j) = (density(&f), momentum(&f));
             let eps: f64 = shares.iter().map(|s| s.fraction).sum();
             for (s, e) in shares.iter().zip(&exchange) {
                 let b_s = if eps > 0.0 { b * s.fraction / eps } else { 0.0 };
                 for a in 0..2 {
-                    let want = b_s * (j[a] - rho * s.velocity[a]);
+                    let want = factor * b_s * (j[a] - rho * s.velocity[a]);
                     prop_assert!((e[a] - want).abs() <= tol, "F_s {e:?} axis {a} vs {want}");
                 }
             }
         }
         let (r, ex) = reference::psm_with_operator(
-            &f, tau, to_reference_weighting(w), superposition, force, &to_reference_solids(&shares),
+            &f, tau, to_reference_weighting(w), ref_op, force, &to_reference_solids(&shares),
         );
         prop_assert!(max_abs_diff(&g, &r) <= ORACLE * scale(&f));
         for (k, e) in exchange.iter().zip(&ex) {
@@ -334,6 +341,63 @@ fn psm_force_on_a_fully_covered_node_drags_the_solid_along() {
     assert_eq!(b, 1.0);
     for a in 0..2 {
         assert!((ex[0][a] - rho * (u[a] - u_s[a])).abs() <= ROUNDOFF * rho);
+    }
+}
+
+/// Ω₃ at a fully covered node is the classic moving-wall bounce-back, f_i ← f_ī + 6 w_i ρ c_i·u_s, for any
+/// populations: the rest population is untouched (so covered regions cannot pile up mass in it, unlike Ω₁,
+/// whose rest population gains (2/3)ρ(u² − u_s²) per step), and with u_s = 0 it is a pure permutation.
+#[test]
+fn psm_bounce_back_operator_at_full_cover_is_moving_wall_bounce_back() {
+    let f0: [f64; 9] = [0.41, 0.12, 0.09, 0.13, 0.1, 0.031, 0.027, 0.022, 0.029];
+    for u_s in [[0.0, 0.0], [0.03, -0.02]] {
+        let mut f = f0;
+        let mut ex = [[0.0; 2]; 1];
+        let shares = [SolidShare {
+            fraction: 1.0,
+            velocity: u_s,
+        }];
+        let params = PsmParams {
+            tau: 0.7,
+            weighting: Weighting::NobleTorczynski,
+            force: [0.0; 2],
+            solid: SolidOperator::BounceBack,
+        };
+        psm_collide(&mut f, &params, &shares, &mut ex);
+        let rho = density(&f0);
+        let w = [
+            4.0 / 9.0,
+            1.0 / 9.0,
+            1.0 / 9.0,
+            1.0 / 9.0,
+            1.0 / 9.0,
+            1.0 / 36.0,
+            1.0 / 36.0,
+            1.0 / 36.0,
+            1.0 / 36.0,
+        ];
+        let c: [[f64; 2]; 9] = [
+            [0.0, 0.0],
+            [1.0, 0.0],
+            [0.0, 1.0],
+            [-1.0, 0.0],
+            [0.0, -1.0],
+            [1.0, 1.0],
+            [-1.0, 1.0],
+            [-1.0, -1.0],
+            [1.0, -1.0],
+        ];
+        let opp = [0, 3, 4, 1, 2, 7, 8, 5, 6];
+        assert_eq!(f[0], f0[0], "rest population must be untouched");
+        for i in 1..9 {
+            let want = f0[opp[i]] + 6.0 * w[i] * rho * (c[i][0] * u_s[0] + c[i][1] * u_s[1]);
+            // Roundoff: a handful of operations on O(0.1) numbers.
+            assert!(
+                (f[i] - want).abs() <= 1e-15,
+                "direction {i}: {} vs {want}",
+                f[i]
+            );
+        }
     }
 }
 

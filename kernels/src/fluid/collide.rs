@@ -14,7 +14,9 @@
 //!   the same momentum ρ(u − u_s) per unit B without forcing. They differ at fully covered nodes (B = 1): Ω₁
 //!   never relaxes the rest population, which gains (2/3)ρu² every step wherever the pre-collision velocity
 //!   inside a solid is non-zero, so in open systems (pressure boundaries) mass accumulates without bound inside
-//!   solids; Ω₂ relaxes every population and stays bounded.
+//!   solids; Ω₂ relaxes every population and stays bounded but lets fluid seep through solids. Ω₃ (Owen
+//!   et al. 2011, eq. 33), Ω^S_{i,s} = f_ī − f_ī^eq(ρ, u_s) + f_i^eq(ρ, u_s) − f_i, is moving-wall bounce-back
+//!   at B = 1: tight and bounded, with twice Ω₁'s momentum exchange per unit B.
 //!   Several solids s may cover one node; their fractions add and are capped at 1 (ε = min(Σ ε_s, 1)), and the
 //!   total weight B(ε) is shared in proportion to ε_s.
 //!   The momentum each solid receives (eq. 4.7, in lattice units: impulse per step = force) is
@@ -42,6 +44,11 @@ pub enum SolidOperator {
     NonEquilibriumBounceBack,
     /// Ω₂, the superposition operator of Holdych (2003) (Owen et al. 2011, eq. 29).
     Superposition,
+    /// Ω₃ (Owen et al. 2011, eq. 33): f_ī − f_ī^eq(ρ, u_s) + f_i^eq(ρ, u_s) − f_i. At B = 1 this is the
+    /// classic moving-wall bounce-back, f_i ← f_ī + 6 w_i ρ c_i·u_s: it never touches the rest population, so
+    /// fully covered regions neither leak fluid (unlike Ω₂) nor accumulate mass (unlike Ω₁). Momentum handed
+    /// over per unit B is 2ρ(u_s − u), twice Ω₁'s.
+    BounceBack,
 }
 
 /// The PSM weight B for a (capped) solid fraction `eps` ∈ [0, 1] and relaxation time `tau`.
@@ -212,8 +219,8 @@ pub fn psm_collide<T: Real>(
         (rho, [j[0] * inv, j[1] * inv])
     };
     let feq = equilibrium(rho, u);
-    // The part of Ω^S common to every share (each share adds f_i^eq(ρ, u_s)):
-    // Ω₁: f_ī − f_ī^eq(ρ, u) − f_i;  Ω₂: (1 − ω)(f_i − f_i^eq(ρ, u)) − f_i.
+    // The part of Ω^S common to every share (each share adds f_i^eq(ρ, u_s), and for Ω₃ also −f_ī^eq(ρ, u_s)):
+    // Ω₁: f_ī − f_ī^eq(ρ, u) − f_i;  Ω₂: (1 − ω)(f_i − f_i^eq(ρ, u)) − f_i;  Ω₃: f_ī − f_i.
     let mut common = [T::zero(); Q];
     match params.solid {
         SolidOperator::NonEquilibriumBounceBack => {
@@ -228,7 +235,13 @@ pub fn psm_collide<T: Real>(
                 common[i] = keep * (f[i] - feq[i]) - f[i];
             }
         }
+        SolidOperator::BounceBack => {
+            for i in 0..Q {
+                common[i] = f[OPPOSITE[i]] - f[i];
+            }
+        }
     }
+    let bounce_back = params.solid == SolidOperator::BounceBack;
     let one_minus_b = T::one() - b_total;
     let mut post = [T::zero(); Q];
     for i in 0..Q {
@@ -246,7 +259,11 @@ pub fn psm_collide<T: Real>(
         let mut mx = T::zero();
         let mut my = T::zero();
         for i in 0..Q {
-            let omega_s = common[i] + feq_s[i];
+            let omega_s = if bounce_back {
+                common[i] + (feq_s[i] - feq_s[OPPOSITE[i]])
+            } else {
+                common[i] + feq_s[i]
+            };
             let d = b_s * omega_s;
             post[i] += d;
             let c = velocity::<T>(i);
