@@ -60,6 +60,9 @@ pub struct CoupledWorld {
     pub substeps: u32,
     /// Loads applied to each grain besides the fluid's (physical units): force and torque.
     pub applied: Vec<([f64; 2], f64)>,
+    /// Per-grain fluid radius factors overriding `fluid_radius` (empty: every grain uses `fluid_radius`);
+    /// used for bands of changed pore-throat size (dissertation §6.8.1).
+    pub grain_fluid_radius: Vec<f64>,
     steps: u64,
 }
 
@@ -101,6 +104,7 @@ impl CoupledWorld {
             weighting,
             substeps,
             applied: vec![([0.0; 2], 0.0); n],
+            grain_fluid_radius: Vec::new(),
             steps: 0,
         })
     }
@@ -117,7 +121,13 @@ impl CoupledWorld {
         self.dem
             .particles
             .iter()
-            .map(|p| {
+            .enumerate()
+            .map(|(i, p)| {
+                let factor = self
+                    .grain_fluid_radius
+                    .get(i)
+                    .copied()
+                    .unwrap_or(self.fluid_radius);
                 let shape = match p.shape {
                     Shape::Disc { radius } => BodyShape::Disc {
                         radius: radius / m.spacing,
@@ -141,7 +151,7 @@ impl CoupledWorld {
                         p.velocity[1] * to_lattice_velocity,
                     ],
                     spin: p.angular_velocity * m.timestep,
-                    shape: shape.scaled(self.fluid_radius),
+                    shape: shape.scaled(factor),
                 }
             })
             .collect()

@@ -6,10 +6,10 @@
 use lbdem_kernels::coupling::{
     body_cell_fraction, body_cell_range, reduce_exchange, rigid_velocity, BodyShape, CoupledBody,
 };
-use lbdem_kernels::fluid::boundary::Boundaries;
+use lbdem_kernels::fluid::boundary::{Boundaries, SideCondition};
 use lbdem_kernels::fluid::collide::{PsmParams, SolidOperator, SolidShare, Weighting};
 use lbdem_kernels::fluid::d2q9::{equilibrium, Q};
-use lbdem_kernels::fluid::lattice::LatticeShape;
+use lbdem_kernels::fluid::lattice::{LatticeShape, Side};
 use lbdem_kernels::fluid::step::{
     classify_special_nodes, collide_covered_nodes, gathered_moments, nodes_in_rows, planes_mut,
     step_band, CoveredNodes, Domain, FluidParams, FLUID, SOLID,
@@ -275,6 +275,29 @@ impl<T: Real> FluidLattice<T> {
             cov.offsets = vec![0];
         }
         self.coverage = Some(cov);
+    }
+
+    /// Change the prescribed density of a Zou–He pressure side (e.g. the boundary pressure drop of the fracture
+    /// test at t = 0). The side must already be a pressure side: its node classification does not change.
+    pub fn set_side_density(&mut self, side: Side, density: T) -> Result<()> {
+        let slot = match side {
+            Side::West => &mut self.bc.west,
+            Side::East => &mut self.bc.east,
+            Side::South => &mut self.bc.south,
+            Side::North => &mut self.bc.north,
+        };
+        match slot {
+            SideCondition::Pressure { density: d } => {
+                *d = density;
+                Ok(())
+            }
+            _ => Err(LbdemError::field(
+                "boundary side",
+                format!("{side:?}"),
+                "is not a pressure side, so its density cannot be set",
+                "declare the side as a pressure boundary when building the lattice",
+            )),
+        }
     }
 
     /// Whether node (x, y) lies on a Zou–He (pressure or velocity) side.

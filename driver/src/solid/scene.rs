@@ -281,6 +281,170 @@ fn non_negative(field: &str, v: f64, hint: &str) -> Result<()> {
     }
 }
 
+/// Range checks of `[packing]` and `[solid]`, naming the field (shared by every scene that packs grains).
+pub(crate) fn validate_packing_and_solid(p: &PackingSection, s: &SolidSection) -> Result<()> {
+    positive("packing.width", p.width, "box width along x")?;
+    positive("packing.height", p.height, "box height along y")?;
+    positive("packing.radius_min", p.radius_min, "e.g. 0.07 cm")?;
+    positive("packing.radius_max", p.radius_max, "e.g. 0.11 cm")?;
+    positive("packing.density", p.density, "e.g. 2.65 g/cm^3")?;
+    positive("packing.isotropic_stress", p.isotropic_stress, "e.g. 50")?;
+    positive("packing.stress_tolerance", p.stress_tolerance, "e.g. 0.2")?;
+    positive(
+        "solid.normal_stiffness",
+        s.normal_stiffness,
+        "e.g. 1e5 dyne/cm (table 6.1)",
+    )?;
+    positive(
+        "solid.shear_stiffness",
+        s.shear_stiffness,
+        "e.g. 1e5 dyne/cm",
+    )?;
+    non_negative("solid.friction", s.friction, "e.g. 0.5 (table 6.1)")?;
+    if !(s.local_damping >= 0.0 && s.local_damping < 1.0) {
+        return Err(LbdemError::field(
+            "solid.local_damping",
+            s.local_damping,
+            "must be in [0, 1)",
+            "PFC and the dissertation use 0.7",
+        ));
+    }
+    positive(
+        "solid.timestep",
+        s.timestep,
+        "run `lbdem check` for the critical step",
+    )?;
+    match s.bonds {
+        Some(BondsSection::Point {
+            stiffness,
+            strength,
+            gap,
+        }) => {
+            positive(
+                "solid.bonds.stiffness",
+                stiffness,
+                "e.g. 1e5 dyne/cm (table 6.1)",
+            )?;
+            positive(
+                "solid.bonds.strength",
+                strength,
+                "e.g. 700 dyne (table 6.1)",
+            )?;
+            non_negative("solid.bonds.gap", gap, "e.g. 1e-3 cm")?;
+        }
+        Some(BondsSection::Parallel {
+            radius_multiplier,
+            normal_stiffness,
+            shear_stiffness,
+            tensile_strength,
+            shear_strength,
+            gap,
+        }) => {
+            positive(
+                "solid.bonds.radius_multiplier",
+                radius_multiplier,
+                "usually 1",
+            )?;
+            positive(
+                "solid.bonds.normal_stiffness",
+                normal_stiffness,
+                "k̄_n = Ē_c/(R_A + R_B)",
+            )?;
+            positive(
+                "solid.bonds.shear_stiffness",
+                shear_stiffness,
+                "k̄_s = k̄_n/(k̄_n/k̄_s)",
+            )?;
+            positive("solid.bonds.tensile_strength", tensile_strength, "σ̄_c")?;
+            positive("solid.bonds.shear_strength", shear_strength, "τ̄_c")?;
+            non_negative("solid.bonds.gap", gap, "e.g. 1e-3 cm")?;
+        }
+        None => {}
+    }
+    let spec = packing_spec::<f64>(p, s);
+    super::packing::check_packing_spec(&spec)
+}
+
+/// The packing procedure's parameters from `[packing]` and `[solid]`.
+pub(crate) fn packing_spec<T: Real>(p: &PackingSection, s: &SolidSection) -> PackingSpec<T> {
+    PackingSpec {
+        width: T::lit(p.width),
+        height: T::lit(p.height),
+        radius_min: T::lit(p.radius_min),
+        radius_max: T::lit(p.radius_max),
+        aspect_ratio: T::lit(p.aspect_ratio),
+        solid_fraction: T::lit(p.solid_fraction),
+        density: T::lit(p.density),
+        seed: p.seed,
+        contact: ContactModel {
+            normal_stiffness: T::lit(s.normal_stiffness),
+            shear_stiffness: T::lit(s.shear_stiffness),
+            friction: T::lit(s.friction),
+            restitution: T::one(),
+            no_tension: true,
+        },
+        timestep: T::lit(s.timestep),
+        growth_steps: p.growth_steps,
+        isotropic_stress: T::lit(p.isotropic_stress),
+        stress_tolerance: T::lit(p.stress_tolerance),
+        max_servo_steps: p.max_adjust_steps,
+        bond_gap: T::lit(bond_gap(s)),
+    }
+}
+
+/// The bonding gap of `[solid.bonds]` (0 without bonds).
+pub(crate) fn bond_gap(s: &SolidSection) -> f64 {
+    match s.bonds {
+        Some(BondsSection::Point { gap, .. }) | Some(BondsSection::Parallel { gap, .. }) => gap,
+        None => 0.0,
+    }
+}
+
+/// The bond law of `[solid.bonds]`.
+pub(crate) fn bond_spec<T: Real>(s: &SolidSection) -> Option<BondSpec<T>> {
+    match s.bonds {
+        Some(BondsSection::Point {
+            stiffness,
+            strength,
+            ..
+        }) => Some(BondSpec::Point {
+            stiffness: T::lit(stiffness),
+            strength: T::lit(strength),
+        }),
+        Some(BondsSection::Parallel {
+            radius_multiplier,
+            normal_stiffness,
+            shear_stiffness,
+            tensile_strength,
+            shear_strength,
+            ..
+        }) => Some(BondSpec::Parallel {
+            radius_multiplier: T::lit(radius_multiplier),
+            normal_stiffness: T::lit(normal_stiffness),
+            shear_stiffness: T::lit(shear_stiffness),
+            tensile_strength: T::lit(tensile_strength),
+            shear_strength: T::lit(shear_strength),
+        }),
+        None => None,
+    }
+}
+
+/// A-priori critical step: a hexagonal block of the smallest particles, fully bonded (six contacts and
+/// six bonds in its interior), through [`DemWorld::critical_time_step`].
+pub(crate) fn critical_time_step(p: &PackingSection, s: &SolidSection) -> f64 {
+    let particles = hexagonal_packing(3, 3, p.radius_min, p.aspect_ratio, 0.0, p.density, 0);
+    let spec = packing_spec::<f64>(p, s);
+    let Ok(mut world) = DemWorld::new(particles, spec.contact, f64::MIN_POSITIVE) else {
+        return f64::NAN;
+    };
+    if let Some(b) = bond_spec::<f64>(s) {
+        if world.bond_touching_pairs(b, 1e-9 * p.radius_min).is_err() {
+            return f64::NAN;
+        }
+    }
+    world.critical_time_step()
+}
+
 impl DryScene {
     /// Parse `path` as a dry scene when its `[scene] kind` is "dry"; `None` for any other kind (and for files
     /// whose header does not parse: the caller's own parser reports those).
@@ -308,86 +472,7 @@ impl DryScene {
 
     /// Range checks naming the field.
     pub fn validate(&self) -> Result<()> {
-        let p = &self.packing;
-        positive("packing.width", p.width, "box width along x")?;
-        positive("packing.height", p.height, "box height along y")?;
-        positive("packing.radius_min", p.radius_min, "e.g. 0.07 cm")?;
-        positive("packing.radius_max", p.radius_max, "e.g. 0.11 cm")?;
-        positive("packing.density", p.density, "e.g. 2.65 g/cm^3")?;
-        positive("packing.isotropic_stress", p.isotropic_stress, "e.g. 50")?;
-        positive("packing.stress_tolerance", p.stress_tolerance, "e.g. 0.2")?;
-        let s = &self.solid;
-        positive(
-            "solid.normal_stiffness",
-            s.normal_stiffness,
-            "e.g. 1e5 dyne/cm (table 6.1)",
-        )?;
-        positive(
-            "solid.shear_stiffness",
-            s.shear_stiffness,
-            "e.g. 1e5 dyne/cm",
-        )?;
-        non_negative("solid.friction", s.friction, "e.g. 0.5 (table 6.1)")?;
-        if !(s.local_damping >= 0.0 && s.local_damping < 1.0) {
-            return Err(LbdemError::field(
-                "solid.local_damping",
-                s.local_damping,
-                "must be in [0, 1)",
-                "PFC and the dissertation use 0.7",
-            ));
-        }
-        positive(
-            "solid.timestep",
-            s.timestep,
-            "run `lbdem check` for the critical step",
-        )?;
-        match s.bonds {
-            Some(BondsSection::Point {
-                stiffness,
-                strength,
-                gap,
-            }) => {
-                positive(
-                    "solid.bonds.stiffness",
-                    stiffness,
-                    "e.g. 1e5 dyne/cm (table 6.1)",
-                )?;
-                positive(
-                    "solid.bonds.strength",
-                    strength,
-                    "e.g. 700 dyne (table 6.1)",
-                )?;
-                non_negative("solid.bonds.gap", gap, "e.g. 1e-3 cm")?;
-            }
-            Some(BondsSection::Parallel {
-                radius_multiplier,
-                normal_stiffness,
-                shear_stiffness,
-                tensile_strength,
-                shear_strength,
-                gap,
-            }) => {
-                positive(
-                    "solid.bonds.radius_multiplier",
-                    radius_multiplier,
-                    "usually 1",
-                )?;
-                positive(
-                    "solid.bonds.normal_stiffness",
-                    normal_stiffness,
-                    "k̄_n = Ē_c/(R_A + R_B)",
-                )?;
-                positive(
-                    "solid.bonds.shear_stiffness",
-                    shear_stiffness,
-                    "k̄_s = k̄_n/(k̄_n/k̄_s)",
-                )?;
-                positive("solid.bonds.tensile_strength", tensile_strength, "σ̄_c")?;
-                positive("solid.bonds.shear_strength", shear_strength, "τ̄_c")?;
-                non_negative("solid.bonds.gap", gap, "e.g. 1e-3 cm")?;
-            }
-            None => {}
-        }
+        validate_packing_and_solid(&self.packing, &self.solid)?;
         let l = &self.loading;
         match l.test {
             LoadingKind::Compression => {
@@ -447,82 +532,16 @@ impl DryScene {
     }
 
     fn packing_spec<T: Real>(&self) -> PackingSpec<T> {
-        let (p, s) = (&self.packing, &self.solid);
-        PackingSpec {
-            width: T::lit(p.width),
-            height: T::lit(p.height),
-            radius_min: T::lit(p.radius_min),
-            radius_max: T::lit(p.radius_max),
-            aspect_ratio: T::lit(p.aspect_ratio),
-            solid_fraction: T::lit(p.solid_fraction),
-            density: T::lit(p.density),
-            seed: p.seed,
-            contact: ContactModel {
-                normal_stiffness: T::lit(s.normal_stiffness),
-                shear_stiffness: T::lit(s.shear_stiffness),
-                friction: T::lit(s.friction),
-                restitution: T::one(),
-                no_tension: true,
-            },
-            timestep: T::lit(s.timestep),
-            growth_steps: p.growth_steps,
-            isotropic_stress: T::lit(p.isotropic_stress),
-            stress_tolerance: T::lit(p.stress_tolerance),
-            max_servo_steps: p.max_adjust_steps,
-            bond_gap: T::lit(self.bond_gap()),
-        }
-    }
-
-    fn bond_gap(&self) -> f64 {
-        match self.solid.bonds {
-            Some(BondsSection::Point { gap, .. }) | Some(BondsSection::Parallel { gap, .. }) => gap,
-            None => 0.0,
-        }
+        packing_spec(&self.packing, &self.solid)
     }
 
     fn bond_spec<T: Real>(&self) -> Option<BondSpec<T>> {
-        match self.solid.bonds {
-            Some(BondsSection::Point {
-                stiffness,
-                strength,
-                ..
-            }) => Some(BondSpec::Point {
-                stiffness: T::lit(stiffness),
-                strength: T::lit(strength),
-            }),
-            Some(BondsSection::Parallel {
-                radius_multiplier,
-                normal_stiffness,
-                shear_stiffness,
-                tensile_strength,
-                shear_strength,
-                ..
-            }) => Some(BondSpec::Parallel {
-                radius_multiplier: T::lit(radius_multiplier),
-                normal_stiffness: T::lit(normal_stiffness),
-                shear_stiffness: T::lit(shear_stiffness),
-                tensile_strength: T::lit(tensile_strength),
-                shear_strength: T::lit(shear_strength),
-            }),
-            None => None,
-        }
+        bond_spec(&self.solid)
     }
 
-    /// A-priori critical step: a hexagonal block of the smallest particles, fully bonded (six contacts and
-    /// six bonds in its interior), through [`DemWorld::critical_time_step`].
+    /// A-priori critical step (see [`critical_time_step`]).
     pub fn critical_time_step(&self) -> f64 {
-        let p = &self.packing;
-        let particles = hexagonal_packing(3, 3, p.radius_min, p.aspect_ratio, 0.0, p.density, 0);
-        let spec = self.packing_spec::<f64>();
-        let Ok(mut world) = DemWorld::new(particles, spec.contact, f64::MIN_POSITIVE) else {
-            return f64::NAN;
-        };
-        if let Some(b) = self.bond_spec::<f64>() {
-            if world.bond_touching_pairs(b, 1e-9 * p.radius_min).is_err() {
-                return f64::NAN;
-            }
-        }
-        world.critical_time_step()
+        critical_time_step(&self.packing, &self.solid)
     }
 
     /// `lbdem check`: validate and describe, refusing a step above the critical one.
