@@ -78,6 +78,7 @@ fn drag_rows(
                 SolidOperatorChoice::BounceBack => "Ω₁",
                 SolidOperatorChoice::Superposition => "Ω₂",
                 SolidOperatorChoice::MovingWall => "Ω₃",
+                SolidOperatorChoice::Linearized => "Ω₁ₗ",
             };
             match solve_array::<f64>(&case) {
                 Ok(r) => println!(

@@ -315,6 +315,11 @@ impl<T: Real> FluidLattice<T> {
         self.solid_operator = op;
     }
 
+    /// The solid collision operator of covered nodes.
+    pub fn solid_operator(&self) -> SolidOperator {
+        self.solid_operator
+    }
+
     /// Solid fraction ε of every node (row-major) from the current coverage: the fractions of the bodies covering
     /// a node added and capped at 1, as the collision uses them (0 for uncovered nodes, including Zou–He nodes).
     pub fn solid_fraction_map(&self) -> Vec<f64> {

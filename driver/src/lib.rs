@@ -6,6 +6,7 @@
 pub mod channel;
 pub mod coupled;
 pub mod error;
+pub mod fracture;
 pub mod lattice;
 pub mod output;
 pub mod porous;

@@ -126,8 +126,11 @@ pub enum SolidOperatorChoice {
     BounceBack,
     /// Ω₂, superposition (bounded in open systems, but leaky).
     Superposition,
-    /// Ω₃ (Owen et al. 2011 eq. 33), moving-wall bounce-back at full cover: bounded and tight.
+    /// Ω₃ (Owen et al. 2011 eq. 33), moving-wall bounce-back at full cover: bounded and tight, fixed solids
+    /// only (unstable with free grains).
     MovingWall,
+    /// Ω₁ₗ, Ω₁ with its equilibrium difference linearised: bounded and stable with free grains.
+    Linearized,
 }
 
 impl SolidOperatorChoice {
@@ -137,6 +140,7 @@ impl SolidOperatorChoice {
             Self::BounceBack => SolidOperator::NonEquilibriumBounceBack,
             Self::Superposition => SolidOperator::Superposition,
             Self::MovingWall => SolidOperator::BounceBack,
+            Self::Linearized => SolidOperator::LinearizedBounceBack,
         }
     }
 }

@@ -21,6 +21,9 @@ pub struct RunOptions {
 
 /// Validate a scene and print its derived parameters without running it.
 pub fn check(scene_path: &Path) -> Result<String> {
+    if let Some(f) = crate::fracture::FractureScene::load_if_fracture(scene_path)? {
+        return f.check(scene_path);
+    }
     if let Some(dry) = crate::solid::scene::DryScene::load_if_dry(scene_path)? {
         return dry.check(scene_path);
     }
@@ -28,6 +31,7 @@ pub fn check(scene_path: &Path) -> Result<String> {
     let labels = scene.scene.units.labels();
     match scene.scene.kind {
         SceneKind::Dry => crate::solid::scene::check_file(scene_path),
+        SceneKind::Fracture => unreachable!("fracture scenes are handled above"),
         SceneKind::Channel => {
             let setup = ChannelSetup::new(&scene)?;
             let mut s = format!("scene {} is valid (kind = channel)\n", scene_path.display());
@@ -45,6 +49,9 @@ pub fn check(scene_path: &Path) -> Result<String> {
 
 /// Run a scene, writing outputs into `out`. Returns the summary as JSON.
 pub fn run(scene_path: &Path, out: &Path, opts: &RunOptions) -> Result<serde_json::Value> {
+    if let Some(f) = crate::fracture::FractureScene::load_if_fracture(scene_path)? {
+        return f.run(scene_path, out, opts.overwrite, opts.quiet);
+    }
     if let Some(dry) = crate::solid::scene::DryScene::load_if_dry(scene_path)? {
         return dry.run(scene_path, out, opts.overwrite);
     }
@@ -52,6 +59,7 @@ pub fn run(scene_path: &Path, out: &Path, opts: &RunOptions) -> Result<serde_jso
     let labels = scene.scene.units.labels();
     match scene.scene.kind {
         SceneKind::Dry => crate::solid::scene::run_file(scene_path, out, opts.overwrite),
+        SceneKind::Fracture => unreachable!("fracture scenes are handled above"),
         SceneKind::Channel => {
             let setup = ChannelSetup::new(&scene)?;
             prepare_dir(out, opts.overwrite)?;

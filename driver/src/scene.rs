@@ -99,6 +99,8 @@ pub enum SceneKind {
     PorousFlow,
     /// A bonded dry sample between platens (no fluid); read by [`crate::solid::scene::DryScene`].
     Dry,
+    /// The fluid-driven fracture test (ch. 6); read by [`crate::fracture::FractureScene`].
+    Fracture,
 }
 
 /// `[scene]`
@@ -323,7 +325,8 @@ impl Scene {
             ));
         }
         match self.scene.kind {
-            SceneKind::Dry => {} // validated by crate::solid::scene::DryScene
+            SceneKind::Dry => {}      // validated by crate::solid::scene::DryScene
+            SceneKind::Fracture => {} // validated by crate::fracture::FractureScene
             SceneKind::Channel => {
                 let c = self.channel.as_ref().ok_or_else(|| {
                     LbdemError::field(

@@ -197,4 +197,14 @@ fn nt_operator_accumulates_mass_inside_solids_of_open_systems_and_the_other_two_
         (f0c - 4.0 / 9.0).abs() < 0.01,
         "Ω₃: rest population {f0c} should stay near 4/9"
     );
+    // Ω₁ₗ (Ω₁ without the even part of its equilibrium difference) never touches the rest population either.
+    let (me, mf, f0d) = open_channel_with_disc(SolidOperator::LinearizedBounceBack, 10_000);
+    assert!(
+        ((mf - me) / me).abs() < 1e-6,
+        "Ω₁ₗ: mass still changing {me} -> {mf}"
+    );
+    assert!(
+        (f0d - 4.0 / 9.0).abs() < 0.01,
+        "Ω₁ₗ: rest population {f0d} should stay near 4/9"
+    );
 }

@@ -193,6 +193,8 @@ pub enum SolidOp {
     Superposition,
     /// Ω₃: f_ī − f_ī^eq(ρ,u_s) + f_i^eq(ρ,u_s) − f_i (Owen et al. eq. 33).
     BounceBack,
+    /// Ω₁ₗ: f_ī − f_i + 3 w_i ρ c_i·(u + u_s) (Ω₁ without the even part of its equilibrium difference).
+    LinearizedBounceBack,
 }
 
 /// As [`psm`], with the solid operator chosen (see [`SolidOp`]).
@@ -227,6 +229,11 @@ pub fn psm_with_operator(
                 SolidOp::Superposition => feq_s[i] - f[i] + (1.0 - 1.0 / tau) * (f[i] - feq[i]),
                 SolidOp::NonEquilibriumBounceBack => f[o] - feq[o] + feq_s[i] - f[i],
                 SolidOp::BounceBack => f[o] - feq_s[o] + feq_s[i] - f[i],
+                SolidOp::LinearizedBounceBack => {
+                    let cv =
+                        c(i)[0] * (u[0] + solid.velocity[0]) + c(i)[1] * (u[1] + solid.velocity[1]);
+                    f[o] - f[i] + 3.0 * W[i] * rho * cv
+                }
             };
             out[i] += b_s * omega_s;
             given_to_fluid[0] += b_s * omega_s * c(i)[0];

@@ -222,18 +222,19 @@ proptest! {
 
     /// PSM conserves mass; the fluid momentum change is (1 − B) F minus the momentum handed to the solids
     /// (Σ exchange), so with no body force momentum is exchanged, never created. Equals the reference,
-    /// exchange included. All three solid operators (Ω₁ non-equilibrium bounce-back, Ω₂ superposition, Ω₃
-    /// moving-wall bounce-back).
+    /// exchange included. All four solid operators (Ω₁ non-equilibrium bounce-back, Ω₂ superposition, Ω₃
+    /// moving-wall bounce-back, Ω₁ₗ linearised Ω₁).
     #[test]
     fn psm_exchanges_momentum_with_the_solids(
         f in node_populations(), tau in tau(), shares in shares(), w in weighting(),
-        forced in any::<bool>(), force in force(), op in 0usize..3,
+        forced in any::<bool>(), force in force(), op in 0usize..4,
     ) {
         let force = if forced { force } else { [0.0; 2] };
         let (solid, ref_op) = [
             (SolidOperator::NonEquilibriumBounceBack, reference::SolidOp::NonEquilibriumBounceBack),
             (SolidOperator::Superposition, reference::SolidOp::Superposition),
             (SolidOperator::BounceBack, reference::SolidOp::BounceBack),
+            (SolidOperator::LinearizedBounceBack, reference::SolidOp::LinearizedBounceBack),
         ][op];
         let params = PsmParams { tau, weighting: w, force, solid };
         let mut g = f;
@@ -250,7 +251,7 @@ proptest! {
         }
         if !forced {
             // REFERENCE.md §2.2–2.3: with Ω₁ or Ω₂ and no forcing, F_s = B_s ρ (u − u_s) for any populations;
-            // Ω₃ hands over twice that.
+            // Ω₃ hands over twice that; Ω₁ₗ exactly Ω₁'s.
             let factor = if solid == SolidOperator::BounceBack { 2.0 } else { 1.0 };
             let (rho, j) = (density(&f), momentum(&f));
             let eps: f64 = shares.iter().map(|s| s.fraction).sum();
@@ -396,6 +397,41 @@ fn psm_bounce_back_operator_at_full_cover_is_moving_wall_bounce_back() {
                 (f[i] - want).abs() <= 1e-15,
                 "direction {i}: {} vs {want}",
                 f[i]
+            );
+        }
+    }
+}
+
+/// Ω₁ₗ at a fully covered node: the rest population is untouched, the node leaves the collision moving with
+/// the solid (as with Ω₁, which is what keeps free grains stable), and mass is unchanged; for any populations.
+#[test]
+fn linearized_operator_at_full_cover_moves_with_the_solid_and_keeps_the_rest_population() {
+    let f0: [f64; 9] = [0.41, 0.12, 0.09, 0.13, 0.1, 0.031, 0.027, 0.022, 0.029];
+    for u_s in [[0.0, 0.0], [0.03, -0.02]] {
+        let mut f = f0;
+        let mut ex = [[0.0; 2]; 1];
+        let shares = [SolidShare {
+            fraction: 1.0,
+            velocity: u_s,
+        }];
+        let params = PsmParams {
+            tau: 0.7,
+            weighting: Weighting::NobleTorczynski,
+            force: [0.0; 2],
+            solid: SolidOperator::LinearizedBounceBack,
+        };
+        psm_collide(&mut f, &params, &shares, &mut ex);
+        assert_eq!(f[0], f0[0], "rest population must be untouched");
+        let rho = density(&f0);
+        // Roundoff: sums of nine O(0.1) numbers.
+        assert!((density(&f) - rho).abs() <= 1e-15);
+        let j = momentum(&f);
+        for a in 0..2 {
+            assert!(
+                (j[a] - rho * u_s[a]).abs() <= 1e-15,
+                "axis {a}: {} vs {}",
+                j[a],
+                rho * u_s[a]
             );
         }
     }

@@ -16,7 +16,14 @@
 //!   inside a solid is non-zero, so in open systems (pressure boundaries) mass accumulates without bound inside
 //!   solids; Ω₂ relaxes every population and stays bounded but lets fluid seep through solids. Ω₃ (Owen
 //!   et al. 2011, eq. 33), Ω^S_{i,s} = f_ī − f_ī^eq(ρ, u_s) + f_i^eq(ρ, u_s) − f_i, is moving-wall bounce-back
-//!   at B = 1: tight and bounded, with twice Ω₁'s momentum exchange per unit B.
+//!   at B = 1: tight and bounded, with twice Ω₁'s momentum exchange per unit B. But with free grains Ω₃ is
+//!   unstable: at B = 1 the fluid inside a grain leaves each collision with its velocity relative to the
+//!   grain reversed, the grain takes the reaction, and the relative velocity w evolves as
+//!   w ← −(1 + 2 m_f/m_s) w (m_f the covered fluid mass, m_s the grain's), which grows for any finite grain
+//!   mass. Ω₁ sets w to 0 instead (w ← −(m_f/m_s) w). The linearised Ω₁ (`LinearizedBounceBack`),
+//!   Ω^S_{i,s} = f_ī − f_i + 3 w_i ρ c_i·(u + u_s), keeps Ω₁'s momentum exchange and interior behaviour and
+//!   drops only the even, O(Ma²) part of Ω₁'s equilibrium difference, which is what pumps mass into the rest
+//!   population: it is the operator for moving grains with pressure boundaries.
 //!   Several solids s may cover one node; their fractions add and are capped at 1 (ε = min(Σ ε_s, 1)), and the
 //!   total weight B(ε) is shared in proportion to ε_s.
 //!   The momentum each solid receives (eq. 4.7, in lattice units: impulse per step = force) is
@@ -47,8 +54,16 @@ pub enum SolidOperator {
     /// Ω₃ (Owen et al. 2011, eq. 33): f_ī − f_ī^eq(ρ, u_s) + f_i^eq(ρ, u_s) − f_i. At B = 1 this is the
     /// classic moving-wall bounce-back, f_i ← f_ī + 6 w_i ρ c_i·u_s: it never touches the rest population, so
     /// fully covered regions neither leak fluid (unlike Ω₂) nor accumulate mass (unlike Ω₁). Momentum handed
-    /// over per unit B is 2ρ(u_s − u), twice Ω₁'s.
+    /// over per unit B is 2ρ(u_s − u), twice Ω₁'s. Not for free grains: at B = 1 it reverses the velocity of
+    /// the fluid inside a grain relative to the grain, and with the grain's reaction the coupled mode grows by
+    /// 1 + 2 m_fluid/m_grain per step (see the module notes).
     BounceBack,
+    /// Ω₁ with the equilibrium difference linearised ("Ω₁ₗ"): f_ī − f_i + 3 w_i ρ c_i·(u + u_s). It is Ω₁ minus
+    /// the part of f_i^eq(ρ, u_s) − f_ī^eq(ρ, u) that is even in c_i (second order in the Mach number), so it
+    /// hands over exactly Ω₁'s momentum ρ(u_s − u) per unit B and sets the fluid velocity at a fully covered
+    /// node to u_s as Ω₁ does (stable with free grains), but never touches the rest population: fully covered
+    /// regions of open systems do not accumulate mass.
+    LinearizedBounceBack,
 }
 
 /// The PSM weight B for a (capped) solid fraction `eps` ∈ [0, 1] and relaxation time `tau`.
@@ -240,8 +255,19 @@ pub fn psm_collide<T: Real>(
                 common[i] = f[OPPOSITE[i]] - f[i];
             }
         }
+        SolidOperator::LinearizedBounceBack => {
+            let w = weights::<T>();
+            let three = T::lit(3.0);
+            for i in 0..Q {
+                let c = velocity::<T>(i);
+                let cu = c[0] * u[0] + c[1] * u[1];
+                common[i] = f[OPPOSITE[i]] - f[i] + three * w[i] * rho * cu;
+            }
+        }
     }
     let bounce_back = params.solid == SolidOperator::BounceBack;
+    let linearized = params.solid == SolidOperator::LinearizedBounceBack;
+    let w_lin = weights::<T>();
     let one_minus_b = T::one() - b_total;
     let mut post = [T::zero(); Q];
     for i in 0..Q {
@@ -255,7 +281,20 @@ pub fn psm_collide<T: Real>(
     }
     for (share, ex) in shares.iter().zip(exchange.iter_mut()) {
         let b_s = b_total * (share.fraction / eps_sum);
-        let feq_s = equilibrium(rho, share.velocity);
+        let feq_s = if linearized {
+            // Only the linear part 3 w_i ρ c_i·u_s is used.
+            let mut l = [T::zero(); Q];
+            for (i, li) in l.iter_mut().enumerate() {
+                let c = velocity::<T>(i);
+                *li = T::lit(3.0)
+                    * w_lin[i]
+                    * rho
+                    * (c[0] * share.velocity[0] + c[1] * share.velocity[1]);
+            }
+            l
+        } else {
+            equilibrium(rho, share.velocity)
+        };
         let mut mx = T::zero();
         let mut my = T::zero();
         for i in 0..Q {
