@@ -1,5 +1,6 @@
 //! [`Persist`] for [`CoupledWorld`]: the fluid lattice, the DEM world, the unit map, the fluid radius, the
-//! PSM weighting, the DEM substeps, the applied loads and the coupled step counter.
+//! PSM weighting, the DEM substeps, the applied loads, the per-grain fluid radii and the coupled
+//! step counter.
 use super::{CoupledWorld, LatticeMap};
 use crate::checkpoint::{Decoder, Encoder, Persist};
 use crate::error::Result;
@@ -38,6 +39,7 @@ impl Persist for CoupledWorld {
             e.f64(f[1]);
             e.f64(*t);
         }
+        e.f64s(&self.grain_fluid_radius);
         e.u64(self.steps);
     }
 
@@ -52,6 +54,7 @@ impl Persist for CoupledWorld {
         let applied = (0..n)
             .map(|_| Ok(([d.f64()?, d.f64()?], d.f64()?)))
             .collect::<Result<Vec<_>>>()?;
+        let grain_fluid_radius = d.f64s()?;
         let steps = d.u64()?;
         d.ensure(applied.len() == dem.particles.len() && substeps >= 1, || {
             format!(
@@ -68,6 +71,7 @@ impl Persist for CoupledWorld {
             weighting,
             substeps,
             applied,
+            grain_fluid_radius,
             steps,
         })
     }
