@@ -126,7 +126,7 @@ impl Encoder {
     /// A length-prefixed slice of floats.
     pub fn reals<T: Real>(&mut self, v: &[T]) {
         self.usize(v.len());
-        self.buf.reserve(v.len() * std::mem::size_of::<T>());
+        self.buf.reserve(std::mem::size_of_val(v));
         for &x in v {
             self.real(x);
         }
@@ -152,7 +152,7 @@ impl Encoder {
         }
     }
     /// Anything [`Persist`].
-    pub fn put<P: Persist + ?Sized>(&mut self, v: &P) {
+    pub fn put<P: Persist>(&mut self, v: &P) {
         v.save(self);
     }
 }

@@ -27,7 +27,7 @@ use std::time::Instant;
 use lbdem_kernels::dem::assembly::ContactModel;
 use lbdem_kernels::dem::shape::Particle;
 use lbdem_kernels::fluid::boundary::Boundaries;
-use lbdem_kernels::fluid::collide::{SolidOperator, Weighting};
+use lbdem_kernels::fluid::collide::Weighting;
 use lbdem_kernels::fluid::step::FluidParams;
 use serde::{Deserialize, Serialize};
 use serde_json::json;
@@ -155,7 +155,7 @@ impl DemoScene {
     /// The initial coupled world.
     pub fn build_world(&self) -> Result<CoupledWorld> {
         let d = &self.demo;
-        let mut fluid = FluidLattice::new(
+        let fluid = FluidLattice::new(
             d.nx,
             d.ny,
             Boundaries::periodic(),
@@ -164,7 +164,6 @@ impl DemoScene {
                 force: [0.0; 2],
             },
         )?;
-        fluid.set_solid_operator(SolidOperator::BounceBack);
         let (w, h) = (d.nx as f64, d.ny as f64);
         let spots = [
             [0.3 * w, 0.3 * h],
@@ -347,7 +346,13 @@ pub struct DemoOptions {
     pub stop_after: Option<u64>,
 }
 
-fn drive(scene: &DemoScene, text: &str, dir: &Path, state: DemoState, opts: &DemoOptions) -> Result<()> {
+fn drive(
+    scene: &DemoScene,
+    text: &str,
+    dir: &Path,
+    state: DemoState,
+    opts: &DemoOptions,
+) -> Result<()> {
     let mut task = DemoTask::new(scene, state);
     let driver = LongRun {
         dir,

@@ -391,8 +391,12 @@ pub fn read_scene_copy(dir: &Path) -> Result<String> {
     let p = dir.join(SCENE_COPY);
     std::fs::read_to_string(&p).map_err(|e| LbdemError::Checkpoint {
         path: dir.join(CHECKPOINT_FILE).display().to_string(),
-        problem: format!("cannot be resumed: the scene copy {} cannot be read ({e})", p.display()),
-        hint: "a resumable run keeps scene.toml next to checkpoint.bin; restore it unchanged".into(),
+        problem: format!(
+            "cannot be resumed: the scene copy {} cannot be read ({e})",
+            p.display()
+        ),
+        hint: "a resumable run keeps scene.toml next to checkpoint.bin; restore it unchanged"
+            .into(),
     })
 }
 

@@ -56,7 +56,8 @@ pub fn run(scene_path: &Path, out: &Path, opts: &RunOptions) -> Result<serde_jso
         };
         return dry.run_resumable(scene_path, out, &opts);
     }
-    if let Some(v) = crate::coupled_demo::run_if_demo(scene_path, out, opts.overwrite, opts.quiet)? {
+    if let Some(v) = crate::coupled_demo::run_if_demo(scene_path, out, opts.overwrite, opts.quiet)?
+    {
         return Ok(v);
     }
     let scene = Scene::load(scene_path)?;

@@ -56,13 +56,16 @@ impl Persist for CoupledWorld {
             .collect::<Result<Vec<_>>>()?;
         let grain_fluid_radius = d.f64s()?;
         let steps = d.u64()?;
-        d.ensure(applied.len() == dem.particles.len() && substeps >= 1, || {
-            format!(
-                "{} applied loads for {} grains, {substeps} substeps",
-                applied.len(),
-                dem.particles.len()
-            )
-        })?;
+        d.ensure(
+            applied.len() == dem.particles.len() && substeps >= 1,
+            || {
+                format!(
+                    "{} applied loads for {} grains, {substeps} substeps",
+                    applied.len(),
+                    dem.particles.len()
+                )
+            },
+        )?;
         Ok(CoupledWorld {
             fluid,
             dem,

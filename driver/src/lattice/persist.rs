@@ -49,10 +49,7 @@ impl<T: Real> Persist for FluidLattice<T> {
         let mut lattice = FluidLattice::<T>::new(nx, ny, bc, params)?;
         let flags = d.bytes()?;
         d.ensure(flags.len() == lattice.shape.nodes(), || {
-            format!(
-                "{} node flags for a {nx} x {ny} lattice",
-                flags.len()
-            )
+            format!("{} node flags for a {nx} x {ny} lattice", flags.len())
         })?;
         lattice.flags = flags;
         lattice.reclassify();

@@ -259,7 +259,11 @@ impl<T: Real> BoundaryStressRun<T> {
             return None;
         }
         let b = self.sample_box;
-        let n = self.test.record_interval.max(1).min(self.test.steps - self.done);
+        let n = self
+            .test
+            .record_interval
+            .max(1)
+            .min(self.test.steps - self.done);
         for _ in 0..n {
             w.step();
         }

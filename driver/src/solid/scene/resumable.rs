@@ -118,7 +118,12 @@ impl<T: Real> Persist for DryState<T> {
             [b.left, b.right, b.bottom, b.top]
                 .iter()
                 .all(|&i| i < world.platens.len()),
-            || format!("sample box names platens beyond the {}", world.platens.len()),
+            || {
+                format!(
+                    "sample box names platens beyond the {}",
+                    world.platens.len()
+                )
+            },
         )?;
         Ok(DryState {
             world,
@@ -365,10 +370,11 @@ impl DryScene {
         opts: &DryRunOptions,
     ) -> Result<serde_json::Value> {
         let p = path.display().to_string();
-        let text = std::fs::read_to_string(path).map_err(|e| crate::error::LbdemError::ReadScene {
-            path: p.clone(),
-            source: e,
-        })?;
+        let text =
+            std::fs::read_to_string(path).map_err(|e| crate::error::LbdemError::ReadScene {
+                path: p.clone(),
+                source: e,
+            })?;
         let critical = self.critical_time_step();
         self.check_timestep(critical)?;
         start_run_dir(out, &text, opts.overwrite)?;
