@@ -699,3 +699,44 @@ fn cli_ctrl_c_writes_a_checkpoint_and_resume_finishes_identically() {
     .unwrap();
     assert_same_outputs(&whole, &out);
 }
+
+#[test]
+fn dry_boundary_stress_test_in_f32_resumes_to_identical_outputs() {
+    let _guard = lock();
+    let text = BUNDLED
+        .replacen("precision = \"f64\"", "precision = \"f32\"", 1)
+        .replacen("width = 2.0", "width = 1.6", 1)
+        .replacen("height = 4.0", "height = 1.0", 1)
+        .replacen("vtk_interval = 40", "vtk_interval = 6", 1)
+        .replacen(
+            "confining_stress = 0.0   # uniaxial",
+            "test = \"boundary_stress\"\naxial_stress = 40.0\nlateral_stress = 50.0\nsteps = 1500",
+            1,
+        )
+        .replacen("platen_speed = 0.02      # cm/s each\n", "", 1)
+        .replacen("max_strain = 0.05\n", "", 1);
+    let root = scratch("dry32");
+    let path = root.join("input.toml");
+    std::fs::write(&path, &text).unwrap();
+    let scene = DryScene::from_toml(&text, "input.toml").unwrap();
+    let opts = |stop_after| DryRunOptions {
+        overwrite: false,
+        quiet: true,
+        stop_after,
+    };
+    let whole = root.join("whole");
+    scene.run_resumable(&path, &whole, &opts(None)).unwrap();
+    let cut = root.join("cut");
+    assert!(matches!(
+        scene.run_resumable(&path, &cut, &opts(Some(700))),
+        Err(LbdemError::Interrupted { step: 700, .. })
+    ));
+    assert_eq!(
+        Checkpoint::read_header(&cut.join(CHECKPOINT_FILE))
+            .unwrap()
+            .precision,
+        4
+    );
+    resume_dry(&cut, true, None).unwrap();
+    assert_same_outputs(&whole, &cut);
+}
