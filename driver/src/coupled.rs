@@ -19,6 +19,8 @@ use crate::error::{LbdemError, Result};
 use crate::lattice::FluidLattice;
 use crate::solid::world::DemWorld;
 
+mod persist;
+
 /// Conversion between the DEM's physical units and the lattice.
 #[derive(Clone, Copy, Debug)]
 pub struct LatticeMap {

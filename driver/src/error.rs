@@ -53,6 +53,43 @@ pub enum LbdemError {
     /// The output directory holds a previous run.
     #[error("output directory {0} already holds a run (summary.json exists)\n  hint: choose another --out or pass --overwrite")]
     OutputExists(String),
+    /// A checkpoint could not be read, is damaged, or belongs to another run.
+    #[error("checkpoint {path} {problem}\n  hint: {hint}")]
+    Checkpoint {
+        /// The checkpoint file.
+        path: String,
+        /// What is wrong with it.
+        problem: String,
+        /// What to do.
+        hint: String,
+    },
+    /// The run was interrupted (Ctrl-C) after writing a checkpoint and the outputs so far.
+    #[error("interrupted at step {step}: checkpoint and outputs so far written to {dir}\n  hint: continue with `lbdem resume {dir}`")]
+    Interrupted {
+        /// Step of the checkpoint.
+        step: u64,
+        /// The run directory.
+        dir: String,
+    },
+    /// A particle's state became non-finite and the run was stopped.
+    #[error("run stopped at step {step}: {quantity} of particle {particle} = {value}; outputs written so far are kept in {out}\n  hint: {hint}")]
+    DivergedParticle {
+        /// Step at which the check failed.
+        step: u64,
+        /// Particle index.
+        particle: usize,
+        /// The quantity that failed (position, velocity, angular velocity).
+        quantity: String,
+        /// Its value.
+        value: String,
+        /// Output directory.
+        out: String,
+        /// What to change.
+        hint: String,
+    },
+    /// The output directory holds an interrupted run.
+    #[error("output directory {0} holds an interrupted run (checkpoint.bin exists)\n  hint: continue it with `lbdem resume {0}`, choose another --out, or pass --overwrite to start again")]
+    InterruptedRunExists(String),
     /// Writing an output failed.
     #[error("cannot write {path}: {source}")]
     Write {

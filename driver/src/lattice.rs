@@ -19,6 +19,8 @@ use rayon::prelude::*;
 
 use crate::error::{LbdemError, Result};
 
+mod persist;
+
 /// A D2Q9 lattice with its buffers.
 pub struct FluidLattice<T: Real> {
     shape: LatticeShape,

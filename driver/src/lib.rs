@@ -4,12 +4,16 @@
 //! place ([`units`]), runs the kernels of `lbdem-kernels`, and writes outputs.
 
 pub mod channel;
+pub mod checkpoint;
 pub mod coupled;
+pub mod coupled_demo;
 pub mod error;
 pub mod fracture;
 pub mod lattice;
+pub mod longrun;
 pub mod output;
 pub mod porous;
+pub mod resume;
 pub mod run;
 pub mod scene;
 pub mod solid;

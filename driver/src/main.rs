@@ -31,11 +31,36 @@ enum Command {
         #[arg(long)]
         quiet: bool,
     },
+    /// Continue an interrupted run (Ctrl-C, or stopped after a checkpoint) in DIR to its end, from
+    /// DIR/checkpoint.bin and the scene copy DIR/scene.toml; the outputs equal an uninterrupted run's.
+    Resume {
+        /// Output directory of the interrupted run.
+        dir: PathBuf,
+        /// Worker threads (default: all cores). Results are bitwise identical for any count.
+        #[arg(long)]
+        threads: Option<usize>,
+        /// No progress bar.
+        #[arg(long)]
+        quiet: bool,
+    },
     /// Validate a scene and print its derived lattice parameters without running it.
     Check {
         /// Scene file.
         scene: PathBuf,
     },
+}
+
+fn set_threads(threads: Option<usize>) -> bool {
+    if let Some(n) = threads {
+        if let Err(e) = rayon::ThreadPoolBuilder::new()
+            .num_threads(n.max(1))
+            .build_global()
+        {
+            eprintln!("lbdem: cannot set up {n} threads: {e}");
+            return false;
+        }
+    }
+    true
 }
 
 fn main() -> ExitCode {
@@ -48,21 +73,31 @@ fn main() -> ExitCode {
             threads,
             quiet,
         } => {
-            if let Some(n) = threads {
-                if let Err(e) = rayon::ThreadPoolBuilder::new()
-                    .num_threads(n.max(1))
-                    .build_global()
-                {
-                    eprintln!("lbdem: cannot set up {n} threads: {e}");
-                    return ExitCode::FAILURE;
-                }
+            if !set_threads(threads) {
+                return ExitCode::FAILURE;
             }
+            lbdem::longrun::install_interrupt_handler();
             lbdem::run::run(&scene, &out, &lbdem::run::RunOptions { overwrite, quiet }).map(|_| ())
+        }
+        Command::Resume {
+            dir,
+            threads,
+            quiet,
+        } => {
+            if !set_threads(threads) {
+                return ExitCode::FAILURE;
+            }
+            lbdem::longrun::install_interrupt_handler();
+            lbdem::resume::resume(&dir, quiet)
         }
         Command::Check { scene } => lbdem::run::check(&scene).map(|s| print!("{s}")),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
+        Err(e @ lbdem::error::LbdemError::Interrupted { .. }) => {
+            eprintln!("lbdem: {e}");
+            ExitCode::from(130)
+        }
         Err(e) => {
             eprintln!("lbdem: error: {e}");
             ExitCode::FAILURE

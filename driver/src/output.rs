@@ -22,10 +22,14 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
     std::fs::rename(&tmp, path).map_err(err)
 }
 
-/// Prepare an output directory: create it, and refuse one that holds a previous run unless `overwrite`.
+/// Prepare an output directory: create it, and refuse one that holds a previous run (finished:
+/// `summary.json`; interrupted: `checkpoint.bin`) unless `overwrite`.
 pub fn prepare_dir(dir: &Path, overwrite: bool) -> Result<()> {
     if dir.join("summary.json").exists() && !overwrite {
         return Err(LbdemError::OutputExists(dir.display().to_string()));
+    }
+    if dir.join(crate::checkpoint::CHECKPOINT_FILE).exists() && !overwrite {
+        return Err(LbdemError::InterruptedRunExists(dir.display().to_string()));
     }
     std::fs::create_dir_all(dir).map_err(|e| LbdemError::Write {
         path: dir.display().to_string(),

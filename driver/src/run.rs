@@ -27,6 +27,9 @@ pub fn check(scene_path: &Path) -> Result<String> {
     if let Some(dry) = crate::solid::scene::DryScene::load_if_dry(scene_path)? {
         return dry.check(scene_path);
     }
+    if let Some(s) = crate::coupled_demo::check_if_demo(scene_path)? {
+        return Ok(s);
+    }
     let scene = Scene::load(scene_path)?;
     let labels = scene.scene.units.labels();
     match scene.scene.kind {
@@ -53,7 +56,16 @@ pub fn run(scene_path: &Path, out: &Path, opts: &RunOptions) -> Result<serde_jso
         return f.run(scene_path, out, opts.overwrite, opts.quiet);
     }
     if let Some(dry) = crate::solid::scene::DryScene::load_if_dry(scene_path)? {
-        return dry.run(scene_path, out, opts.overwrite);
+        let opts = crate::solid::scene::DryRunOptions {
+            overwrite: opts.overwrite,
+            quiet: opts.quiet,
+            stop_after: None,
+        };
+        return dry.run_resumable(scene_path, out, &opts);
+    }
+    if let Some(v) = crate::coupled_demo::run_if_demo(scene_path, out, opts.overwrite, opts.quiet)?
+    {
+        return Ok(v);
     }
     let scene = Scene::load(scene_path)?;
     let labels = scene.scene.units.labels();

@@ -15,7 +15,8 @@
 use lbdem_kernels::Real;
 
 use super::packing::Packing;
-use super::world::{DemWorld, PlatenControl, SampleBox};
+use super::staged::{BoundaryStressRun, CompressionRun};
+use super::world::{DemWorld, PlatenControl};
 
 /// Parameters of a compression test.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -84,10 +85,6 @@ pub fn slope(points: &[(f64, f64)]) -> f64 {
     sxy / sxx
 }
 
-fn axial_stress<T: Real>(w: &DemWorld<T>, b: &SampleBox) -> T {
-    T::lit(0.5) * (w.platens[b.bottom].stress() + w.platens[b.top].stress())
-}
-
 /// Run a compression test on a bonded packing (its world is advanced in place). `on_record` sees each
 /// recorded point (progress, output).
 pub fn run_compression<T: Real>(
@@ -95,107 +92,14 @@ pub fn run_compression<T: Real>(
     test: &CompressionTest<T>,
     mut on_record: impl FnMut(&DemWorld<T>, &CurvePoint),
 ) -> CompressionResult {
-    let b = packing.sample_box;
     let w = &mut packing.world;
-    let width0 = w.platens[b.right].wall.point[0] - w.platens[b.left].wall.point[0];
-    let confined = test.confining_stress > T::zero();
-    if confined {
-        let servo = PlatenControl::Servo {
-            target_stress: test.confining_stress,
-            relaxation: T::lit(0.5),
-            max_speed: T::lit(10.0) * test.platen_speed,
-        };
-        w.platens[b.left].control = servo;
-        w.platens[b.right].control = servo;
-    } else {
-        w.platens[b.left].active = false;
-        w.platens[b.right].active = false;
-        w.sample_box = None;
-        w.platens[b.bottom].length = width0;
-        w.platens[b.top].length = width0;
-    }
-    w.platens[b.bottom].control = PlatenControl::Speed(T::zero());
-    w.platens[b.top].control = PlatenControl::Speed(T::zero());
-    for _ in 0..test.settle_steps {
-        w.step();
-    }
-    let h0 = (w.platens[b.top].wall.point[1] - w.platens[b.bottom].wall.point[1]).to_f64_exact();
-    let lateral0 = if confined {
-        (w.platens[b.right].wall.point[0] - w.platens[b.left].wall.point[0]).to_f64_exact()
-    } else {
-        let (lo, hi) = w.bounds();
-        (hi[0] - lo[0]).to_f64_exact()
-    };
-    let start_stress = axial_stress(w, &b).to_f64_exact();
-    let reference = if confined {
-        test.confining_stress.to_f64_exact()
-    } else {
-        start_stress
-    };
-    w.platens[b.bottom].control = PlatenControl::Speed(test.platen_speed);
-    w.platens[b.top].control = PlatenControl::Speed(test.platen_speed);
-    let mut curve = Vec::new();
-    let mut peak = f64::NEG_INFINITY;
-    let mut peak_at = 0;
-    let start_step = w.step_count();
-    let interval = test.record_interval.max(1);
-    loop {
-        for _ in 0..interval {
-            w.step();
-        }
-        let h = (w.platens[b.top].wall.point[1] - w.platens[b.bottom].wall.point[1]).to_f64_exact();
-        let lateral = if confined {
-            (w.platens[b.right].wall.point[0] - w.platens[b.left].wall.point[0]).to_f64_exact()
-        } else {
-            let (lo, hi) = w.bounds();
-            (hi[0] - lo[0]).to_f64_exact()
-        };
-        let sa = axial_stress(w, &b).to_f64_exact();
-        let lateral_stress = if confined {
-            0.5 * (w.platens[b.left].stress() + w.platens[b.right].stress()).to_f64_exact()
-        } else {
-            0.0
-        };
-        let point = CurvePoint {
-            step: w.step_count(),
-            axial_strain: (h0 - h) / h0,
-            lateral_strain: (lateral - lateral0) / lateral0,
-            axial_stress: sa,
-            deviator_stress: sa - reference,
-            lateral_stress,
-            broken_bonds: w.breaks.len(),
-        };
-        on_record(w, &point);
-        curve.push(point);
-        if sa > peak {
-            peak = sa;
-            peak_at = curve.len() - 1;
-        }
-        // Failure: past the peak, bonds broken, and the deviator down to the given fraction of its peak.
-        let q_peak = peak - reference;
-        let past_peak = curve.len() - 1 > peak_at
-            && !w.breaks.is_empty()
-            && q_peak > 0.0
-            && sa - reference < test.post_peak_fraction.to_f64_exact() * q_peak;
-        if past_peak || point.axial_strain > test.max_strain.to_f64_exact() || !sa.is_finite() {
-            break;
+    let mut run = CompressionRun::new(w, packing.sample_box, *test);
+    while !run.finished {
+        if let Some(point) = run.advance(w) {
+            on_record(w, &point);
         }
     }
-    let peak_point = curve[peak_at];
-    let q_peak = peak_point.deviator_stress;
-    let elastic: Vec<(f64, f64)> = curve[..=peak_at]
-        .iter()
-        .filter(|p| p.deviator_stress >= 0.1 * q_peak && p.deviator_stress <= 0.5 * q_peak)
-        .map(|p| (p.axial_strain, p.deviator_stress))
-        .collect();
-    CompressionResult {
-        youngs_modulus: slope(&elastic),
-        peak_stress: peak,
-        peak_deviator: q_peak,
-        peak_strain: peak_point.axial_strain,
-        steps: w.step_count() - start_step,
-        curve,
-    }
+    run.result(w)
 }
 
 /// The loading of the dissertation's fracture test (ch. 6.6) without fluid, its dry control: the lateral
@@ -223,58 +127,12 @@ pub fn run_boundary_stress<T: Real>(
     test: &BoundaryStressTest<T>,
     mut on_record: impl FnMut(&DemWorld<T>, &CurvePoint),
 ) -> Vec<CurvePoint> {
-    let b = packing.sample_box;
     let w = &mut packing.world;
-    w.platens[b.top].active = false;
-    w.sample_box = None;
-    let width = w.platens[b.right].wall.point[0] - w.platens[b.left].wall.point[0];
-    let height = w.platens[b.top].wall.point[1] - w.platens[b.bottom].wall.point[1];
-    w.platens[b.bottom].length = width;
-    w.platens[b.bottom].control = PlatenControl::Speed(T::zero());
-    for side in [b.left, b.right] {
-        w.platens[side].length = height;
-        w.platens[side].control = PlatenControl::Servo {
-            target_stress: test.lateral_stress,
-            relaxation: T::lit(0.5),
-            max_speed: T::lit(1e-3) * height / w.timestep(),
-        };
-    }
-    let top = w.boundary_particles(3, test.boundary_depth);
-    w.apply_boundary_stress(&top, [T::zero(), -T::one()], test.axial_stress, width);
-    let mean_top = |w: &DemWorld<T>| {
-        top.iter()
-            .map(|&i| w.particles[i].position[1].to_f64_exact())
-            .sum::<f64>()
-            / top.len().max(1) as f64
-    };
-    let (y0, h0) = (mean_top(w), height.to_f64_exact());
-    let lateral0 = width.to_f64_exact();
-    let mut curve = Vec::new();
-    let interval = test.record_interval.max(1);
-    let mut done = 0;
-    while done < test.steps {
-        for _ in 0..interval.min(test.steps - done) {
-            w.step();
-        }
-        done += interval.min(test.steps - done);
-        let lateral =
-            (w.platens[b.right].wall.point[0] - w.platens[b.left].wall.point[0]).to_f64_exact();
-        let axial = w.platens[b.bottom].stress().to_f64_exact();
-        let point = CurvePoint {
-            step: w.step_count(),
-            axial_strain: (y0 - mean_top(w)) / h0,
-            lateral_strain: (lateral - lateral0) / lateral0,
-            axial_stress: axial,
-            deviator_stress: axial
-                - 0.5 * (w.platens[b.left].stress() + w.platens[b.right].stress()).to_f64_exact(),
-            lateral_stress: 0.5
-                * (w.platens[b.left].stress() + w.platens[b.right].stress()).to_f64_exact(),
-            broken_bonds: w.breaks.len(),
-        };
+    let mut run = BoundaryStressRun::new(w, packing.sample_box, *test);
+    while let Some(point) = run.advance(w) {
         on_record(w, &point);
-        curve.push(point);
     }
-    curve
+    run.curve
 }
 
 /// Parameters of a Brazilian (diametral compression) test of a bonded disc (REFERENCE §7.4): two flat rigid

@@ -19,6 +19,7 @@
 pub mod loading;
 pub mod packing;
 pub mod scene;
+pub mod staged;
 pub mod vtk;
 pub mod world;
 

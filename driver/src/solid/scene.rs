@@ -37,23 +37,19 @@
 //! max_strain = 0.05
 //! ```
 use std::path::Path;
-use std::time::Instant;
 
 use lbdem_kernels::dem::assembly::ContactModel;
-use lbdem_kernels::dem::bond::BreakMode;
 use lbdem_kernels::Real;
 use serde::{Deserialize, Serialize};
-use serde_json::json;
 
-use super::loading::{
-    run_boundary_stress, run_compression, BoundaryStressTest, CompressionTest, CurvePoint,
-};
-use super::packing::{generate_packing, hexagonal_packing, PackingSpec};
-use super::vtk::particles_vtk;
+use super::packing::{hexagonal_packing, PackingSpec};
 use super::world::{BondSpec, DemWorld, CRITICAL_STEP_SAFETY};
 use crate::error::{LbdemError, Result};
-use crate::output::{csv, prepare_dir, write_atomic};
-use crate::scene::{positive, Precision, SceneHeader, SceneKind};
+use crate::longrun::LongRunSection;
+use crate::scene::{positive, SceneHeader, SceneKind};
+
+mod resumable;
+pub use resumable::{resume_dry, DryRunOptions, DryState, DryTask, Stage, DRY_KIND};
 
 /// `[packing]`: the box, the size distribution and the isotropic stress (see [`PackingSpec`]).
 #[derive(Clone, Debug, Deserialize, Serialize)]
@@ -237,6 +233,9 @@ pub struct DryScene {
     pub solid: SolidSection,
     /// `[loading]`.
     pub loading: LoadingSection,
+    /// `[run]` (optional): `checkpoint_interval` of the long-run driver.
+    #[serde(default)]
+    pub run: LongRunSection,
 }
 
 /// `lbdem check` of a dry scene file.
@@ -608,187 +607,17 @@ impl DryScene {
         )
     }
 
-    /// `lbdem run`: pack, bond, load, write the outputs into `out`. Returns the summary.
+    /// `lbdem run`: pack, bond, load, write the outputs into `out`. Returns the summary. Runs through the
+    /// long-run driver ([`DryScene::run_resumable`]): checkpoints in `out`, Ctrl-C, `lbdem resume`.
     pub fn run(&self, path: &Path, out: &Path, overwrite: bool) -> Result<serde_json::Value> {
-        let critical = self.critical_time_step();
-        self.check_timestep(critical)?;
-        prepare_dir(out, overwrite)?;
-        eprintln!("lbdem: dry scene {}", path.display());
-        eprint!("{}", self.describe(critical));
-        match self.scene.precision {
-            Precision::F64 => self.run_with::<f64>(path, out, critical),
-            Precision::F32 => self.run_with::<f32>(path, out, critical),
-        }
-    }
-
-    fn run_with<T: Real>(
-        &self,
-        path: &Path,
-        out: &Path,
-        critical: f64,
-    ) -> Result<serde_json::Value> {
-        let start = Instant::now();
-        let spec = self.packing_spec::<T>();
-        let mut packing = generate_packing(&spec, self.bond_spec::<T>())?;
-        packing.world.local_damping = T::lit(self.solid.local_damping);
-        let particles = packing.world.particles.len();
-        let bonds = packing.world.bonds.len();
-        eprintln!(
-            "lbdem: packed {particles} particles, {bonds} bonds in {} steps (converged: {}; wall stresses {:?})",
-            packing.steps,
-            packing.converged,
-            packing.wall_stresses.map(|x| x.to_f64_exact())
-        );
-        let l = &self.loading;
-        let test = CompressionTest {
-            confining_stress: T::lit(l.confining_stress),
-            platen_speed: T::lit(l.platen_speed),
-            settle_steps: l.settle_steps,
-            max_strain: T::lit(l.max_strain),
-            post_peak_fraction: T::lit(l.post_peak_fraction),
-            record_interval: l.record_interval,
-        };
-        let title = self
-            .scene
-            .name
-            .clone()
-            .unwrap_or_else(|| "lbdem dry scene".into());
-        let mut snapshots = 0usize;
-        let mut records = 0u64;
-        let mut write_error = None;
-        let mut snapshot = |w: &DemWorld<T>, n: usize| {
-            let text = particles_vtk(&title, &w.particles, &w.broken_bond_fraction());
-            let file = out.join(format!("particles_{n:04}.vtk"));
-            if let Err(e) = write_atomic(&file, text.as_bytes()) {
-                write_error.get_or_insert(e);
-            }
-        };
-        snapshot(&packing.world, 0);
-        snapshots += 1;
-        let mut on_record = |w: &DemWorld<T>, _: &CurvePoint| {
-            records += 1;
-            if l.vtk_interval > 0 && records.is_multiple_of(l.vtk_interval) {
-                snapshot(w, snapshots);
-                snapshots += 1;
-            }
-        };
-        let (curve_points, results) = match l.test {
-            LoadingKind::Compression => {
-                let r = run_compression(&mut packing, &test, &mut on_record);
-                let results = json!({
-                    "youngs_modulus": r.youngs_modulus,
-                    "peak_axial_stress": r.peak_stress,
-                    "peak_deviator_stress": r.peak_deviator,
-                    "peak_axial_strain": r.peak_strain,
-                    "loading_steps": r.steps,
-                });
-                (r.curve, results)
-            }
-            LoadingKind::BoundaryStress => {
-                let test = BoundaryStressTest {
-                    lateral_stress: T::lit(l.lateral_stress),
-                    axial_stress: T::lit(l.axial_stress),
-                    boundary_depth: T::lit(0.5 * self.packing.radius_min),
-                    steps: l.steps,
-                    record_interval: l.record_interval,
-                };
-                let curve = run_boundary_stress(&mut packing, &test, &mut on_record);
-                let last = curve.last().copied();
-                let results = json!({
-                    "final_axial_strain": last.map(|c| c.axial_strain),
-                    "final_lateral_strain": last.map(|c| c.lateral_strain),
-                    "final_bottom_platen_stress": last.map(|c| c.axial_stress),
-                    "final_lateral_stress": last.map(|c| c.lateral_stress),
-                    "loading_steps": l.steps,
-                });
-                (curve, results)
-            }
-        };
-        snapshot(&packing.world, snapshots);
-        snapshots += 1;
-        if let Some(e) = write_error {
-            return Err(e);
-        }
-        let w = &packing.world;
-        let dt = w.timestep().to_f64_exact();
-        let curve = csv(
-            &[
-                "step",
-                "axial_strain",
-                "lateral_strain",
-                "axial_stress",
-                "deviator_stress",
-                "lateral_stress",
-                "broken_bonds",
-            ],
-            curve_points.iter().map(|c| {
-                vec![
-                    c.step as f64,
-                    c.axial_strain,
-                    c.lateral_strain,
-                    c.axial_stress,
-                    c.deviator_stress,
-                    c.lateral_stress,
-                    c.broken_bonds as f64,
-                ]
-            }),
-        );
-        write_atomic(&out.join("stress_strain.csv"), curve.as_bytes())?;
-        let mut broken =
-            String::from("step,time,particle_i,particle_j,x,y,mode,orientation,load\n");
-        for b in &w.breaks {
-            let mode = match b.mode {
-                BreakMode::Tension => "tension",
-                BreakMode::Shear => "shear",
-                BreakMode::Compression => "compression",
-            };
-            broken += &format!(
-                "{},{:.10e},{},{},{:.10e},{:.10e},{mode},{:.10e},{:.10e}\n",
-                b.step,
-                b.step as f64 * dt,
-                b.pair[0],
-                b.pair[1],
-                b.position[0].to_f64_exact(),
-                b.position[1].to_f64_exact(),
-                b.orientation.to_f64_exact(),
-                b.load.to_f64_exact()
-            );
-        }
-        write_atomic(&out.join("broken_bonds.csv"), broken.as_bytes())?;
-        let count = |m: BreakMode| w.breaks.iter().filter(|b| b.mode == m).count();
-        let summary = json!({
-            "lbdem_version": env!("CARGO_PKG_VERSION"),
-            "scene_file": path.display().to_string(),
-            "scene": self,
-            "units": self.scene.units.labels(),
-            "derived": {
-                "particles": particles,
-                "bonds": bonds,
-                "packing_steps": packing.steps,
-                "packing_converged": packing.converged,
-                "size_factor": packing.size_factor.to_f64_exact(),
-                "isotropic_wall_stresses": packing.wall_stresses.map(|x| x.to_f64_exact()),
-                "critical_time_step": critical,
-                "timestep": dt,
+        self.run_resumable(
+            path,
+            out,
+            &DryRunOptions {
+                overwrite,
+                quiet: true,
+                stop_after: None,
             },
-            "results": {
-                "test": results,
-                "broken_bonds": w.breaks.len(),
-                "broken_in_tension": count(BreakMode::Tension),
-                "broken_in_shear": count(BreakMode::Shear),
-                "broken_in_compression": count(BreakMode::Compression),
-                "vtk_snapshots": snapshots,
-            },
-            "wall_seconds": start.elapsed().as_secs_f64(),
-            "threads": rayon::current_num_threads(),
-        });
-        let text = serde_json::to_string_pretty(&summary).unwrap_or_default();
-        write_atomic(&out.join("summary.json"), text.as_bytes())?;
-        eprintln!(
-            "lbdem: {results}; {} bonds broken; outputs in {}",
-            w.breaks.len(),
-            out.display()
-        );
-        Ok(summary)
+        )
     }
 }

@@ -38,6 +38,8 @@ use rayon::prelude::*;
 
 use crate::error::{LbdemError, Result};
 
+mod persist;
+
 /// Contacts per particle assumed by the critical-step estimate (the hexagonal coordination of equal discs).
 pub const ASSUMED_CONTACT_COORDINATION: f64 = 6.0;
 /// Fraction of the critical step the world accepts (PFC's default safety factor).
