@@ -777,13 +777,15 @@ impl Persist for SolidOperator {
             SolidOperator::NonEquilibriumBounceBack => 0,
             SolidOperator::Superposition => 1,
             SolidOperator::BounceBack => 2,
+            SolidOperator::LinearizedBounceBack => 3,
         });
     }
     fn load(d: &mut Decoder<'_>) -> Result<Self> {
-        Ok(match d.tag("PSM solid operator", 3)? {
+        Ok(match d.tag("PSM solid operator", 4)? {
             0 => SolidOperator::NonEquilibriumBounceBack,
             1 => SolidOperator::Superposition,
-            _ => SolidOperator::BounceBack,
+            2 => SolidOperator::BounceBack,
+            _ => SolidOperator::LinearizedBounceBack,
         })
     }
 }
