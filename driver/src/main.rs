@@ -48,6 +48,14 @@ enum Command {
         /// Scene file.
         scene: PathBuf,
     },
+    /// Overlay the broken bonds against time of several fracture runs in one PNG (e.g. the permeability study).
+    CompareBreaks {
+        /// Output directories of fracture runs (each holds history.csv and scene.toml).
+        dirs: Vec<PathBuf>,
+        /// The PNG to write.
+        #[arg(long)]
+        out: PathBuf,
+    },
 }
 
 fn set_threads(threads: Option<usize>) -> bool {
@@ -91,6 +99,7 @@ fn main() -> ExitCode {
             lbdem::resume::resume(&dir, quiet)
         }
         Command::Check { scene } => lbdem::run::check(&scene).map(|s| print!("{s}")),
+        Command::CompareBreaks { dirs, out } => lbdem::fracture::compare_breaks(&dirs, &out),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

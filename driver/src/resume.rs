@@ -26,6 +26,7 @@ pub fn resume(dir: &Path, quiet: bool) -> Result<()> {
     let header = Checkpoint::read_header(&path)?;
     match header.kind.as_str() {
         DRY_KIND => resume_dry(dir, quiet, None).map(|_| ()),
+        crate::fracture::FRACTURE_KIND => crate::fracture::resume_fracture(dir, quiet).map(|_| ()),
         DEMO_KIND => resume_demo(
             dir,
             &DemoOptions {

@@ -28,7 +28,6 @@ pub mod vtk;
 use std::path::Path;
 use std::time::Instant;
 
-use indicatif::{ProgressBar, ProgressStyle};
 use lbdem_kernels::fluid::boundary::{Boundaries, SideCondition};
 use lbdem_kernels::fluid::collide::Weighting;
 use lbdem_kernels::fluid::lattice::Side;
@@ -36,10 +35,15 @@ use lbdem_kernels::fluid::step::FluidParams;
 use serde::{Deserialize, Serialize};
 use serde_json::json;
 
+use crate::checkpoint::{Checkpoint, Decoder, Encoder, Persist, CHECKPOINT_FILE, SCENE_COPY};
 use crate::coupled::{CoupledWorld, LatticeMap};
 use crate::error::{LbdemError, Result};
 use crate::lattice::FluidLattice;
-use crate::output::{csv, prepare_dir, write_atomic};
+use crate::longrun::{
+    dem_health, read_scene_copy, start_run_dir, LongRun, LongRunSection, LongTask, OutputStage,
+    RunEnd,
+};
+use crate::output::{csv, write_atomic};
 use crate::porous::SolidOperatorChoice;
 use crate::scene::{positive, FluidSection, Precision, SceneHeader, SceneKind};
 use crate::solid::packing::{generate_packing, Packing};
@@ -190,7 +194,13 @@ pub struct FractureScene {
     /// `[[heterogeneity]]` bands.
     #[serde(default)]
     pub heterogeneity: Vec<Band>,
+    /// `[run]`: checkpoint interval.
+    #[serde(default)]
+    pub run: LongRunSection,
 }
+
+/// Kind tag of fracture checkpoints.
+pub const FRACTURE_KIND: &str = "fracture";
 
 #[derive(Deserialize)]
 struct KindOnly {
@@ -355,7 +365,7 @@ impl FractureScene {
                 "set pressure_drop = 0 for the dry control, or add [fluid]",
             ));
         }
-        Ok(())
+        self.timesteps().map(|_| ())
     }
 
     /// Units, lattice size and densities; refuses τ ≤ ½, a density drop above 20 %, high Mach.
@@ -527,7 +537,8 @@ impl FractureScene {
         ))
     }
 
-    /// `lbdem run`.
+    /// `lbdem run`: prepare (pack, settle, couple), then run to the end with checkpoints (`lbdem resume DIR`
+    /// continues an interrupted run bitwise-identically).
     pub fn run(
         &self,
         path: &Path,
@@ -535,12 +546,33 @@ impl FractureScene {
         overwrite: bool,
         quiet: bool,
     ) -> Result<serde_json::Value> {
+        self.run_with(path, out, overwrite, quiet, None, None)
+    }
+
+    /// [`FractureScene::run`] with an optional ready packing (from [`FractureRun::pack`]) and an optional stop
+    /// (as if interrupted) after `stop_after` steps.
+    pub fn run_with(
+        &self,
+        path: &Path,
+        out: &Path,
+        overwrite: bool,
+        quiet: bool,
+        packing: Option<Packing<f64>>,
+        stop_after: Option<u64>,
+    ) -> Result<serde_json::Value> {
+        let text = std::fs::read_to_string(path).map_err(|e| LbdemError::ReadScene {
+            path: path.display().to_string(),
+            source: e,
+        })?;
         let description = self.describe()?;
-        prepare_dir(out, overwrite)?;
+        start_run_dir(out, &text, overwrite)?;
         eprintln!("lbdem: fracture scene {}", path.display());
         eprint!("{description}");
-        let mut run = FractureRun::prepare(self)?;
-        run.execute(out, quiet)
+        let run = match packing {
+            Some(p) => FractureRun::prepare_packed(self, p)?,
+            None => FractureRun::prepare(self)?,
+        };
+        drive(run, &text, out, quiet, stop_after)
     }
 
     /// Which grains lie in a heterogeneity band: the band's fluid radius, or `None`.
@@ -557,9 +589,9 @@ impl FractureScene {
     }
 }
 
-/// What the fluid part of a run holds.
-struct FluidPart {
-    world: CoupledWorld,
+/// The fluid part of a run.
+struct FluidView<'b> {
+    world: &'b CoupledWorld,
     setup: FluidSetup,
     /// Row of the centre line.
     center_row: usize,
@@ -588,27 +620,285 @@ pub struct HistoryRow {
     pub kinetic_energy: f64,
 }
 
-/// A prepared fracture run: the packed, bonded and settled sample, and the lattice if any.
+/// A prepared fracture run: the packed, bonded and settled sample, the lattice if any, and everything measured
+/// so far. All of it goes into checkpoints.
 pub struct FractureRun<'a> {
     scene: &'a FractureScene,
-    dem: Option<DemWorld<f64>>,
-    fluid: Option<FluidPart>,
+    state: FractureState,
+    started: Instant,
+}
+
+/// The persistent state of a fracture run.
+pub struct FractureState {
+    coupled: Option<CoupledWorld>,
+    dry: Option<DemWorld<f64>>,
     sample: SampleBox,
     ends: [Vec<usize>; 2],
     /// Initial axial length (mean x distance between the end particles) and lateral height (platens).
     reference: [f64; 2],
-    packed: serde_json::Value,
+    packed: String,
+    permeability: String,
     dt: f64,
     steps_done: u64,
+    dropped: bool,
+    /// DEM step count at the drop (break records count from it).
+    drop_step: u64,
     history: Vec<HistoryRow>,
     center_pressure: Vec<Vec<f64>>,
     center_speed: Vec<Vec<f64>>,
     center_x: Vec<f64>,
     snapshots: usize,
     prep_seconds: f64,
-    /// DEM step count at the drop (break records count from it).
-    drop_step: u64,
-    out_name: String,
+}
+
+impl Persist for FractureState {
+    fn save(&self, e: &mut Encoder) {
+        e.bool(self.coupled.is_some());
+        if let Some(w) = &self.coupled {
+            e.put(w);
+        }
+        e.bool(self.dry.is_some());
+        if let Some(w) = &self.dry {
+            e.put(w);
+        }
+        for v in [
+            self.sample.left,
+            self.sample.right,
+            self.sample.bottom,
+            self.sample.top,
+        ] {
+            e.usize(v);
+        }
+        for end in &self.ends {
+            e.usize(end.len());
+            end.iter().for_each(|&i| e.usize(i));
+        }
+        e.f64s(&self.reference);
+        e.str(&self.packed);
+        e.str(&self.permeability);
+        e.f64(self.dt);
+        e.u64(self.steps_done);
+        e.bool(self.dropped);
+        e.u64(self.drop_step);
+        e.usize(self.history.len());
+        for h in &self.history {
+            e.f64s(&h.to_row());
+        }
+        for m in [&self.center_pressure, &self.center_speed] {
+            e.usize(m.len());
+            m.iter().for_each(|r| e.f64s(r));
+        }
+        e.f64s(&self.center_x);
+        e.usize(self.snapshots);
+        e.f64(self.prep_seconds);
+    }
+    fn load(d: &mut Decoder<'_>) -> Result<Self> {
+        let coupled = if d.bool()? { Some(d.get()?) } else { None };
+        let dry = if d.bool()? { Some(d.get()?) } else { None };
+        let sample = SampleBox {
+            left: d.usize()?,
+            right: d.usize()?,
+            bottom: d.usize()?,
+            top: d.usize()?,
+        };
+        let mut ends = [Vec::new(), Vec::new()];
+        for end in &mut ends {
+            let n = d.len(8)?;
+            *end = (0..n).map(|_| d.usize()).collect::<Result<Vec<_>>>()?;
+        }
+        let r = d.f64s()?;
+        d.ensure(r.len() == 2, || {
+            "a reference length pair of the wrong size".into()
+        })?;
+        let packed = d.str()?;
+        let permeability = d.str()?;
+        let dt = d.f64()?;
+        let steps_done = d.u64()?;
+        let dropped = d.bool()?;
+        let drop_step = d.u64()?;
+        let n = d.len(8)?;
+        let mut history = Vec::with_capacity(n);
+        for _ in 0..n {
+            let row = d.f64s()?;
+            d.ensure(row.len() == HISTORY_COLUMNS.len(), || {
+                "a history row of the wrong width".into()
+            })?;
+            history.push(HistoryRow::from_row(&row));
+        }
+        let mut mats = [Vec::new(), Vec::new()];
+        for m in &mut mats {
+            let n = d.len(8)?;
+            *m = (0..n).map(|_| d.f64s()).collect::<Result<Vec<_>>>()?;
+        }
+        let [center_pressure, center_speed] = mats;
+        let center_x = d.f64s()?;
+        let snapshots = d.usize()?;
+        let prep_seconds = d.f64()?;
+        d.ensure(coupled.is_some() != dry.is_some(), || {
+            "a fracture state must hold exactly one world".into()
+        })?;
+        Ok(FractureState {
+            coupled,
+            dry,
+            sample,
+            ends,
+            reference: [r[0], r[1]],
+            packed,
+            permeability,
+            dt,
+            steps_done,
+            dropped,
+            drop_step,
+            history,
+            center_pressure,
+            center_speed,
+            center_x,
+            snapshots,
+            prep_seconds,
+        })
+    }
+}
+
+const HISTORY_COLUMNS: [&str; 9] = [
+    "time",
+    "axial_strain",
+    "lateral_strain",
+    "lateral_stress",
+    "axial_stress",
+    "broken_bonds",
+    "mean_pore_pressure",
+    "max_fluid_speed",
+    "kinetic_energy",
+];
+
+impl HistoryRow {
+    fn to_row(self) -> Vec<f64> {
+        vec![
+            self.time,
+            self.axial_strain,
+            self.lateral_strain,
+            self.lateral_stress,
+            self.axial_stress,
+            self.broken_bonds as f64,
+            self.mean_pore_pressure,
+            self.max_speed,
+            self.kinetic_energy,
+        ]
+    }
+    fn from_row(r: &[f64]) -> Self {
+        HistoryRow {
+            time: r[0],
+            axial_strain: r[1],
+            lateral_strain: r[2],
+            lateral_stress: r[3],
+            axial_stress: r[4],
+            broken_bonds: r[5] as usize,
+            mean_pore_pressure: r[6],
+            max_speed: r[7],
+            kinetic_energy: r[8],
+        }
+    }
+}
+
+/// Drive a prepared run (or a resumed one) to its end with checkpoints.
+fn drive(
+    mut run: FractureRun<'_>,
+    text: &str,
+    out: &Path,
+    quiet: bool,
+    stop_after: Option<u64>,
+) -> Result<serde_json::Value> {
+    let driver = LongRun {
+        dir: out,
+        scene_text: text,
+        interval: run.scene.run.checkpoint_interval,
+        quiet,
+        stop_after,
+    };
+    let end = driver.run(&mut run)?;
+    if end == RunEnd::Finished {
+        eprintln!(
+            "lbdem: fracture run finished: {} steps, {} bonds broken; outputs in {}",
+            run.state.steps_done,
+            run.dem().breaks.len(),
+            out.display()
+        );
+    }
+    end.into_result(out)?;
+    let summary = std::fs::read_to_string(out.join("summary.json")).unwrap_or_default();
+    Ok(serde_json::from_str(&summary).unwrap_or_default())
+}
+
+/// `lbdem resume DIR` of a fracture run.
+pub fn resume_fracture(dir: &Path, quiet: bool) -> Result<serde_json::Value> {
+    let text = read_scene_copy(dir)?;
+    let scene = FractureScene::from_toml(&text, &dir.join(SCENE_COPY).display().to_string())?;
+    let (h, state) =
+        Checkpoint::load::<FractureState>(&dir.join(CHECKPOINT_FILE), &text, FRACTURE_KIND)?;
+    eprintln!("lbdem: resuming fracture run at step {}", h.step);
+    let run = FractureRun {
+        scene: &scene,
+        state,
+        started: Instant::now(),
+    };
+    drive(run, &text, dir, quiet, None)
+}
+
+impl LongTask for FractureRun<'_> {
+    type State = FractureState;
+    const KIND: &'static str = FRACTURE_KIND;
+
+    fn state(&self) -> &FractureState {
+        &self.state
+    }
+    fn steps_done(&self) -> u64 {
+        self.state.steps_done
+    }
+    fn total_steps(&self) -> Option<u64> {
+        Some(self.total())
+    }
+    fn finished(&self) -> bool {
+        self.state.dropped && self.state.steps_done >= self.total()
+    }
+    fn advance(&mut self, dir: &Path) -> Result<()> {
+        if !self.state.dropped {
+            if self.state.coupled.is_some() && self.scene.output.permeability {
+                self.state.permeability = self.measure_permeability()?.to_string();
+            }
+            self.record()?;
+            self.snapshot(dir)?;
+            self.drop_loads()?;
+            self.state.drop_step = self.dem().step_count();
+            self.state.dropped = true;
+            return Ok(());
+        }
+        let (record_every, snapshot_every) = self.intervals();
+        let total = self.total();
+        let next_record = (self.state.steps_done / record_every + 1) * record_every;
+        let target = next_record.min(total);
+        while self.state.steps_done < target {
+            self.step();
+        }
+        self.record()?;
+        if let Some(w) = &self.state.coupled {
+            dem_health(&w.dem)?;
+        } else if let Some(w) = &self.state.dry {
+            dem_health(w)?;
+        }
+        if self.state.steps_done.is_multiple_of(snapshot_every) && self.state.steps_done < total {
+            self.snapshot(dir)?;
+        }
+        Ok(())
+    }
+    fn write_outputs(&mut self, dir: &Path, stage: OutputStage) -> Result<()> {
+        if stage == OutputStage::Checkpoint {
+            return Ok(());
+        }
+        if stage == OutputStage::Finished {
+            self.snapshot(dir)?;
+        }
+        self.write_tables(dir, stage == OutputStage::Finished)
+    }
 }
 
 impl<'a> FractureRun<'a> {
@@ -691,27 +981,31 @@ impl<'a> FractureRun<'a> {
         ];
         let mut run = FractureRun {
             scene,
-            dem: None,
-            fluid: None,
-            sample: sample_box,
-            ends,
-            reference,
-            packed,
-            dt,
-            steps_done: 0,
-            history: Vec::new(),
-            center_pressure: Vec::new(),
-            center_speed: Vec::new(),
-            center_x: Vec::new(),
-            snapshots: 0,
-            prep_seconds: 0.0,
-            drop_step: 0,
-            out_name: String::new(),
+            state: FractureState {
+                coupled: None,
+                dry: None,
+                sample: sample_box,
+                ends,
+                reference,
+                packed: packed.to_string(),
+                permeability: String::new(),
+                dt,
+                steps_done: 0,
+                dropped: false,
+                drop_step: 0,
+                history: Vec::new(),
+                center_pressure: Vec::new(),
+                center_speed: Vec::new(),
+                center_x: Vec::new(),
+                snapshots: 0,
+                prep_seconds: 0.0,
+            },
+            started: Instant::now(),
         };
         match &scene.fluid {
             None => {
                 world.set_timestep(dt)?;
-                run.dem = Some(world);
+                run.state.dry = Some(world);
             }
             Some(f) => {
                 let mut warnings = Warnings::default();
@@ -776,29 +1070,57 @@ impl<'a> FractureRun<'a> {
                     a.0 = f;
                 }
                 let center_row = ny / 2;
-                run.center_x = (0..nx).map(|i| left + i as f64 * u.spacing).collect();
-                run.fluid = Some(FluidPart {
-                    world: coupled,
-                    setup,
-                    center_row,
-                });
+                run.state.center_x = (0..nx).map(|i| left + i as f64 * u.spacing).collect();
+                let _ = (setup, center_row);
+                run.state.coupled = Some(coupled);
             }
         }
-        run.prep_seconds = start.elapsed().as_secs_f64();
+        run.state.prep_seconds = start.elapsed().as_secs_f64();
         Ok(run)
     }
 
     fn dem(&self) -> &DemWorld<f64> {
-        match (&self.fluid, &self.dem) {
-            (Some(f), _) => &f.world.dem,
+        match (&self.state.coupled, &self.state.dry) {
+            (Some(w), _) => &w.dem,
             (None, Some(d)) => d,
             (None, None) => unreachable!("a run holds either a coupled or a dry world"),
         }
     }
 
+    /// The fluid part: the coupled world, the derived set-up, the centre row.
+    fn fluid(&self) -> Option<FluidView<'_>> {
+        let world = self.state.coupled.as_ref()?;
+        let f = self.scene.fluid.as_ref()?;
+        let setup = self.scene.fluid_setup(f, &mut Warnings::default()).ok()?;
+        Some(FluidView {
+            world,
+            setup,
+            center_row: setup.nodes[1] / 2,
+        })
+    }
+
+    fn total(&self) -> u64 {
+        (self.scene.loading.duration / self.state.dt)
+            .round()
+            .max(1.0) as u64
+    }
+
+    /// Steps between records and between snapshots.
+    fn intervals(&self) -> (u64, u64) {
+        let o = &self.scene.output;
+        let record_every = ((o.record_interval / self.state.dt).round() as u64).max(1);
+        let snapshot_every = if o.snapshot_interval > 0.0 {
+            ((o.snapshot_interval / self.state.dt).round() as u64).max(1)
+        } else {
+            u64::MAX
+        };
+        (record_every, snapshot_every)
+    }
+
     fn lateral_height(&self) -> f64 {
         let d = self.dem();
-        d.platens[self.sample.top].wall.point[1] - d.platens[self.sample.bottom].wall.point[1]
+        d.platens[self.state.sample.top].wall.point[1]
+            - d.platens[self.state.sample.bottom].wall.point[1]
     }
 
     /// The drop at t = 0: axial stress and boundary fluid pressure.
@@ -806,19 +1128,20 @@ impl<'a> FractureRun<'a> {
         let l = &self.scene.loading;
         let height = self.lateral_height();
         let damping = l.local_damping.unwrap_or(self.scene.solid.local_damping);
-        match (&mut self.fluid, &mut self.dem) {
-            (Some(fp), _) => fp.world.dem.local_damping = damping,
+        match (&mut self.state.coupled, &mut self.state.dry) {
+            (Some(w), _) => w.dem.local_damping = damping,
             (None, Some(d)) => d.local_damping = damping,
             _ => {}
         }
-        match &mut self.fluid {
-            Some(fp) => {
-                let w = &mut fp.world;
+        let density_low = self.fluid().map(|f| f.setup.density_low);
+        let ends = &self.state.ends;
+        match &mut self.state.coupled {
+            Some(w) => {
                 // The applied loads live in `applied` for the coupled world.
                 let mut scratch = vec![[0.0; 2]; w.dem.particles.len()];
                 spread_axial(
                     &w.dem,
-                    &self.ends,
+                    &self.state.ends,
                     l.axial_stress_after,
                     height,
                     &mut scratch,
@@ -826,37 +1149,41 @@ impl<'a> FractureRun<'a> {
                 for (a, f) in w.applied.iter_mut().zip(scratch) {
                     a.0 = f;
                 }
-                let lo = fp.setup.density_low;
+                let lo = density_low.expect("fluid set-up");
                 w.fluid.set_side_density(Side::West, lo)?;
                 w.fluid.set_side_density(Side::East, lo)?;
             }
             None => {
-                let d = self.dem.as_mut().expect("dry world");
-                apply_axial(d, &self.ends, l.axial_stress_after, height);
+                let d = self.state.dry.as_mut().expect("dry world");
+                apply_axial(d, ends, l.axial_stress_after, height);
             }
         }
         Ok(())
     }
 
     fn step(&mut self) {
-        match &mut self.fluid {
-            Some(fp) => fp.world.step(),
-            None => self.dem.as_mut().expect("dry world").step(),
+        match &mut self.state.coupled {
+            Some(w) => w.step(),
+            None => self.state.dry.as_mut().expect("dry world").step(),
         }
-        self.steps_done += 1;
+        self.state.steps_done += 1;
     }
 
     fn record(&mut self) -> Result<()> {
-        let time = self.steps_done as f64 * self.dt;
+        let time = self.state.steps_done as f64 * self.state.dt;
         let d = self.dem();
-        let axial_strain = (self.reference[0] - end_distance(d, &self.ends)) / self.reference[0];
-        let lateral_strain = (self.reference[1] - self.lateral_height()) / self.reference[1];
-        let lateral_stress =
-            0.5 * (d.platens[self.sample.bottom].stress() + d.platens[self.sample.top].stress());
+        let axial_strain =
+            (self.state.reference[0] - end_distance(d, &self.state.ends)) / self.state.reference[0];
+        let lateral_strain =
+            (self.state.reference[1] - self.lateral_height()) / self.state.reference[1];
+        let lateral_stress = 0.5
+            * (d.platens[self.state.sample.bottom].stress()
+                + d.platens[self.state.sample.top].stress());
         let broken = d.breaks.len();
         let ke = d.kinetic_energy();
         let band = self.scene.packing.radius_max;
-        let (mean_p, max_speed) = match &self.fluid {
+        let mut lines = None;
+        let (mean_p, max_speed) = match self.fluid() {
             Some(fp) => {
                 let (rho, u) = fp.world.fluid.moments();
                 let eps = fp.world.fluid.solid_fraction_map();
@@ -865,9 +1192,11 @@ impl<'a> FractureRun<'a> {
                 let c = units.lattice_speed;
                 let [nx, ny] = fp.setup.nodes;
                 let (lo, hi) = d.bounds();
-                let x0 = ((lo[0] - self.center_x[0]) / units.spacing).ceil().max(0.0) as usize;
-                let x1 =
-                    (((hi[0] - self.center_x[0]) / units.spacing).floor() as usize).min(nx - 1);
+                let x0 = ((lo[0] - self.state.center_x[0]) / units.spacing)
+                    .ceil()
+                    .max(0.0) as usize;
+                let x1 = (((hi[0] - self.state.center_x[0]) / units.spacing).floor() as usize)
+                    .min(nx - 1);
                 let mut sum = 0.0;
                 let mut weight = 0.0;
                 let mut vmax: f64 = 0.0;
@@ -883,7 +1212,7 @@ impl<'a> FractureRun<'a> {
                                 value: if bad_velocity { format!("{:?}", u[k]) } else { format!("{r}") },
                                 x,
                                 y,
-                                out: self.out_name.clone(),
+                                out: String::new(),
                                 hint: "lower loading.pressure_drop, or refine fluid.timestep (a higher sound speed lowers the lattice density drop)".into(),
                             });
                         }
@@ -923,19 +1252,22 @@ impl<'a> FractureRun<'a> {
                         sline[x] = f64::NAN;
                     }
                 }
-                self.center_pressure.push(pline);
-                self.center_speed.push(sline);
+                lines = Some((pline, sline));
                 let mean = sum / weight.max(1e-300);
                 (p_scale * (mean - fp.setup.density_low), c * vmax)
             }
             None => (0.0, 0.0),
         };
-        let axial_stress = if time > 0.0 || self.steps_done > 0 {
+        if let Some((pline, sline)) = lines {
+            self.state.center_pressure.push(pline);
+            self.state.center_speed.push(sline);
+        }
+        let axial_stress = if time > 0.0 || self.state.steps_done > 0 {
             self.scene.loading.axial_stress_after
         } else {
             self.scene.loading.axial_stress
         };
-        self.history.push(HistoryRow {
+        self.state.history.push(HistoryRow {
             time,
             axial_strain,
             lateral_strain,
@@ -950,8 +1282,8 @@ impl<'a> FractureRun<'a> {
     }
 
     fn snapshot(&mut self, out: &Path) -> Result<()> {
-        let n = self.snapshots;
-        self.snapshots += 1;
+        let n = self.state.snapshots;
+        self.state.snapshots += 1;
         let d = self.dem();
         let title = self
             .scene
@@ -966,7 +1298,7 @@ impl<'a> FractureRun<'a> {
             let text = vtk::bonds_vtk(&title, d);
             write_atomic(&out.join(format!("bonds_{n:04}.vtk")), text.as_bytes())?;
         }
-        let field = self.fluid.as_ref().map(|fp| {
+        let field = self.fluid().map(|fp| {
             let (rho, u) = fp.world.fluid.moments();
             let units = fp.setup.units;
             let p_scale = units.density * units.sound_speed * units.sound_speed;
@@ -994,7 +1326,7 @@ impl<'a> FractureRun<'a> {
             }
         }
         if self.scene.output.figures {
-            let time = self.steps_done as f64 * self.dt;
+            let time = self.state.steps_done as f64 * self.state.dt;
             let png = out.join(format!("snapshot_{n:04}.png"));
             if let Err(e) = figures::snapshot_png(&png, d, &broken, field.as_ref(), time) {
                 eprintln!("lbdem: WARNING: figure {} not drawn: {e}", png.display());
@@ -1003,68 +1335,10 @@ impl<'a> FractureRun<'a> {
         Ok(())
     }
 
-    /// Run from the drop to the end, writing every output into `out`.
-    pub fn execute(&mut self, out: &Path, quiet: bool) -> Result<serde_json::Value> {
-        let start = Instant::now();
-        self.out_name = out.display().to_string();
-        let o = &self.scene.output;
-        let total = (self.scene.loading.duration / self.dt).round().max(1.0) as u64;
-        let record_every = ((o.record_interval / self.dt).round() as u64).max(1);
-        let snapshot_every = if o.snapshot_interval > 0.0 {
-            ((o.snapshot_interval / self.dt).round() as u64).max(1)
-        } else {
-            u64::MAX
-        };
-        let permeability = match (&self.fluid, o.permeability) {
-            (Some(_), true) => Some(self.measure_permeability()?),
-            _ => None,
-        };
-        self.record()?;
-        self.snapshot(out)?;
-        self.drop_loads()?;
-        self.drop_step = self.dem().step_count();
-        let bar = if quiet {
-            ProgressBar::hidden()
-        } else {
-            ProgressBar::new(total)
-        };
-        bar.set_style(
-            ProgressStyle::with_template(
-                "{bar:40} {pos}/{len} steps  {per_sec}  elapsed {elapsed}  eta {eta}  {msg}",
-            )
-            .unwrap_or_else(|_| ProgressStyle::default_bar()),
-        );
-        let mut failure = None;
-        while self.steps_done < total {
-            self.step();
-            if self.steps_done.is_multiple_of(record_every) || self.steps_done == total {
-                if let Err(e) = self.record() {
-                    failure = Some(e);
-                    break;
-                }
-                bar.set_position(self.steps_done);
-                bar.set_message(format!("{} bonds broken", self.dem().breaks.len()));
-            }
-            if self.steps_done.is_multiple_of(snapshot_every) && self.steps_done < total {
-                self.snapshot(out)?;
-            }
-        }
-        bar.finish_and_clear();
-        if failure.is_none() {
-            self.snapshot(out)?;
-        }
-        let seconds = start.elapsed().as_secs_f64();
-        let summary = self.write_outputs(out, seconds, permeability)?;
-        match failure {
-            Some(e) => Err(e),
-            None => Ok(summary),
-        }
-    }
-
     /// Steady Darcy flow through the intact sample (table 6.3's method): grains fixed, a small pressure
     /// difference across the ends, run until the flux settles; k = μ q L/Δp with q the superficial flux.
     fn measure_permeability(&self) -> Result<serde_json::Value> {
-        let fp = self.fluid.as_ref().expect("fluid");
+        let fp = self.fluid().expect("fluid");
         let setup = fp.setup;
         let [nx, ny] = setup.nodes;
         let units = setup.units;
@@ -1140,12 +1414,11 @@ impl<'a> FractureRun<'a> {
         }))
     }
 
-    fn write_outputs(
-        &self,
-        out: &Path,
-        seconds: f64,
-        permeability: Option<serde_json::Value>,
-    ) -> Result<serde_json::Value> {
+    /// The tables and figures so far; with `finished`, also `summary.json` (last).
+    fn write_tables(&self, out: &Path, finished: bool) -> Result<()> {
+        let seconds = self.started.elapsed().as_secs_f64();
+        let permeability: Option<serde_json::Value> =
+            serde_json::from_str(&self.state.permeability).ok();
         let d = self.dem();
         let history = csv(
             &[
@@ -1159,7 +1432,7 @@ impl<'a> FractureRun<'a> {
                 "max_fluid_speed",
                 "kinetic_energy",
             ],
-            self.history.iter().map(|h| {
+            self.state.history.iter().map(|h| {
                 vec![
                     h.time,
                     h.axial_strain,
@@ -1177,7 +1450,7 @@ impl<'a> FractureRun<'a> {
         let rows: Vec<BreakRow> = d
             .breaks
             .iter()
-            .map(|b| BreakRow::from_record(b, self.drop_step, self.dt))
+            .map(|b| BreakRow::from_record(b, self.state.drop_step, self.state.dt))
             .collect();
         write_atomic(
             &out.join("breaks.csv"),
@@ -1190,33 +1463,35 @@ impl<'a> FractureRun<'a> {
             analysis::fractures_csv(&fractures).as_bytes(),
         )?;
         let orientation = analysis::orientation_summary(&rows, &fractures);
-        if self.fluid.is_some() {
-            let times: Vec<f64> = self.history.iter().map(|h| h.time).collect();
+        if self.state.coupled.is_some() {
+            let times: Vec<f64> = self.state.history.iter().map(|h| h.time).collect();
             write_atomic(
                 &out.join("centerline_pressure.csv"),
-                analysis::matrix_csv(&times, &self.center_x, &self.center_pressure).as_bytes(),
+                analysis::matrix_csv(&times, &self.state.center_x, &self.state.center_pressure)
+                    .as_bytes(),
             )?;
             write_atomic(
                 &out.join("centerline_speed.csv"),
-                analysis::matrix_csv(&times, &self.center_x, &self.center_speed).as_bytes(),
+                analysis::matrix_csv(&times, &self.state.center_x, &self.state.center_speed)
+                    .as_bytes(),
             )?;
             if self.scene.output.figures {
                 let labels = self.scene.scene.units.labels();
                 for (name, data, what) in [
                     (
                         "centerline_pressure.png",
-                        &self.center_pressure,
+                        &self.state.center_pressure,
                         format!("pore pressure above the drained ends ({})", labels.pressure),
                     ),
                     (
                         "centerline_speed.png",
-                        &self.center_speed,
+                        &self.state.center_speed,
                         format!("fluid speed ({})", labels.velocity),
                     ),
                 ] {
                     let path = out.join(name);
                     if let Err(e) =
-                        figures::time_distance_png(&path, &times, &self.center_x, data, &what)
+                        figures::time_distance_png(&path, &times, &self.state.center_x, data, &what)
                     {
                         eprintln!("lbdem: WARNING: figure {} not drawn: {e}", path.display());
                     }
@@ -1237,7 +1512,8 @@ impl<'a> FractureRun<'a> {
                 .unwrap_or_else(|| "run".into());
             let series = vec![(
                 label,
-                self.history
+                self.state
+                    .history
                     .iter()
                     .map(|h| (h.time, h.broken_bonds as f64))
                     .collect::<Vec<_>>(),
@@ -1246,8 +1522,8 @@ impl<'a> FractureRun<'a> {
                 eprintln!("lbdem: WARNING: figure {} not drawn: {e}", path.display());
             }
         }
-        let last = self.history.last();
-        let fluid = self.fluid.as_ref().map(|fp| {
+        let last = self.state.history.last();
+        let fluid = self.fluid().map(|fp| {
             json!({
                 "units": fp.setup.units,
                 "nodes": fp.setup.nodes,
@@ -1258,20 +1534,19 @@ impl<'a> FractureRun<'a> {
                 "fluid_mass": fp.world.fluid.mass(),
             })
         });
-        let node_updates = self
-            .fluid
-            .as_ref()
-            .map(|fp| (fp.setup.nodes[0] * fp.setup.nodes[1]) as f64 * self.steps_done as f64);
+        let node_updates = self.fluid().map(|fp| {
+            (fp.setup.nodes[0] * fp.setup.nodes[1]) as f64 * self.state.steps_done as f64
+        });
         let summary = json!({
             "scene": self.scene,
-            "packing": self.packed,
+            "packing": self.state.packed,
             "fluid": fluid,
-            "steps": self.steps_done,
-            "model_time": self.steps_done as f64 * self.dt,
-            "timestep": self.dt,
-            "preparation_seconds": self.prep_seconds,
+            "steps": self.state.steps_done,
+            "model_time": self.state.steps_done as f64 * self.state.dt,
+            "timestep": self.state.dt,
+            "preparation_seconds": self.state.prep_seconds,
             "wall_seconds": seconds,
-            "steps_per_second": self.steps_done as f64 / seconds.max(1e-9),
+            "steps_per_second": self.state.steps_done as f64 / seconds.max(1e-9),
             "coupled_mlups": node_updates.map(|n| n / seconds.max(1e-9) / 1e6),
             "results": {
                 "broken_bonds": d.breaks.len(),
@@ -1283,10 +1558,64 @@ impl<'a> FractureRun<'a> {
                 "permeability": permeability,
             },
         });
-        let text = serde_json::to_string_pretty(&summary).unwrap_or_default();
-        write_atomic(&out.join("summary.json"), text.as_bytes())?;
-        Ok(summary)
+        if finished {
+            let text = serde_json::to_string_pretty(&summary).unwrap_or_default();
+            write_atomic(&out.join("summary.json"), text.as_bytes())?;
+        }
+        Ok(())
     }
+}
+
+/// `lbdem compare-breaks`: the broken bonds against time of several fracture runs, overlaid in one PNG, each
+/// labelled with its scene's name (from `DIR/scene.toml`) or its directory.
+pub fn compare_breaks(dirs: &[std::path::PathBuf], out: &Path) -> Result<()> {
+    if dirs.is_empty() {
+        return Err(LbdemError::field(
+            "dirs",
+            "none",
+            "no run directories given",
+            "pass the output directories of one or more fracture runs",
+        ));
+    }
+    let mut series = Vec::new();
+    for dir in dirs {
+        let path = dir.join("history.csv");
+        let text = std::fs::read_to_string(&path).map_err(|e| LbdemError::ReadScene {
+            path: path.display().to_string(),
+            source: e,
+        })?;
+        let mut lines = text.lines();
+        let header: Vec<&str> = lines.next().unwrap_or_default().split(',').collect();
+        let (Some(t), Some(b)) = (
+            header.iter().position(|h| *h == "time"),
+            header.iter().position(|h| *h == "broken_bonds"),
+        ) else {
+            return Err(LbdemError::field(
+                "history.csv",
+                path.display(),
+                "has no time/broken_bonds columns",
+                "give the output directory of a fracture run",
+            ));
+        };
+        let pts: Vec<(f64, f64)> = lines
+            .filter_map(|l| {
+                let v: Vec<f64> = l.split(',').filter_map(|x| x.parse().ok()).collect();
+                Some((*v.get(t)?, *v.get(b)?))
+            })
+            .collect();
+        let label = std::fs::read_to_string(dir.join(SCENE_COPY))
+            .ok()
+            .and_then(|s| toml::from_str::<toml::Value>(&s).ok())
+            .and_then(|v| v.get("scene")?.get("name")?.as_str().map(String::from))
+            .unwrap_or_else(|| dir.display().to_string());
+        series.push((label, pts));
+    }
+    figures::breaks_png(out, &series).map_err(|e| LbdemError::Write {
+        path: out.display().to_string(),
+        source: std::io::Error::other(e.to_string()),
+    })?;
+    eprintln!("lbdem: wrote {}", out.display());
+    Ok(())
 }
 
 /// Mean x of the right end particles minus that of the left ones.
