@@ -77,9 +77,33 @@ pub struct FractureFluid {
     /// Free fluid beyond each end of the sample along x (default 0.3 cm).
     #[serde(default = "default_margin")]
     pub margin: f64,
+    /// PSM weighting B (default "noble_torczynski", eq. 4.5).
+    #[serde(default)]
+    pub weighting: WeightingChoice,
     /// PSM solid operator (default "linearized", Ω₁ₗ: bounded with pressure boundaries, stable with free grains).
     #[serde(default = "default_operator")]
     pub solid_operator: SolidOperatorChoice,
+}
+
+/// The PSM weighting a scene asks for.
+#[derive(Clone, Copy, Debug, Deserialize, Serialize, PartialEq, Eq, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum WeightingChoice {
+    /// B(ε, τ) = ε(τ − ½)/((1 − ε) + (τ − ½)) (dissertation eq. 4.5). Near τ = ½ it makes partly covered
+    /// cells almost fluid (B ≪ ε), so the fluid radius the flow feels is smaller than the one given.
+    #[default]
+    NobleTorczynski,
+    /// B = ε: the solid weight follows the covered area whatever τ.
+    SolidFraction,
+}
+
+impl WeightingChoice {
+    fn kernel(self) -> Weighting {
+        match self {
+            Self::NobleTorczynski => Weighting::NobleTorczynski,
+            Self::SolidFraction => Weighting::SolidFraction,
+        }
+    }
 }
 
 fn default_margin() -> f64 {
@@ -487,7 +511,7 @@ impl FractureScene {
                     "  fluid: h = {h} {len}, dt = {dt:.4e} {t}, nu = {nu} {vi}, tau = {tau:.4}, c = {c:.4e} {v}, c_s = {cs:.4e} {v}, \
                      compressibility 1/(rho c_s^2) = {beta:.3e} 1/({pr})\n  \
                      lattice {nx} x {ny} = {nodes} nodes; fluid radius {fr}; {npg:.1} nodes across the smallest grain's minor axis as the fluid sees it\n  \
-                     pore density {hi:.5} -> ends {lo:.5} (lattice), expected Mach {ma:.3}; solid operator {op:?}\n",
+                     pore density {hi:.5} -> ends {lo:.5} (lattice), expected Mach {ma:.3}; solid operator {op:?}, weighting {wt:?}\n",
                     h = u.spacing,
                     dt = u.timestep,
                     nu = u.viscosity,
@@ -504,6 +528,7 @@ impl FractureScene {
                     lo = fs.density_low,
                     ma = fs.expected_mach,
                     op = f.solid_operator,
+                    wt = f.weighting,
                     len = labels.length,
                     t = labels.time,
                     v = labels.velocity,
@@ -1060,7 +1085,7 @@ impl<'a> FractureRun<'a> {
                     world,
                     map,
                     f.fluid_radius,
-                    Weighting::NobleTorczynski,
+                    f.weighting.kernel(),
                     1,
                 )?;
                 if !scene.heterogeneity.is_empty() {
@@ -1368,7 +1393,7 @@ impl<'a> FractureRun<'a> {
             b.velocity = [0.0; 2];
             b.spin = 0.0;
         }
-        lattice.cover_with_bodies(&bodies, Weighting::NobleTorczynski);
+        lattice.cover_with_bodies(&bodies, fp.world.weighting);
         let flux = |l: &FluidLattice<f64>| -> f64 {
             // Mean superficial x-velocity over the whole lattice = volume flux per unit height / ... in lattice
             // units: Σ u_x (1 − ε) / (nx ny) times ny gives the flux per column.
