@@ -140,6 +140,18 @@ pub fn disc_triangle_signed_area<T: Real>(r: T, p: [T; 2], q: [T; 2]) -> T {
 /// Exact area of the ellipse (centre `c`, semi-axes `a`, `b`, orientation `theta` of the `a` axis from x)
 /// intersected with the axis-aligned rectangle `rect` = [x0, x1, y0, y1] (i.e. [x0, x1] × [y0, y1]).
 pub fn ellipse_rectangle_area<T: Real>(c: [T; 2], a: T, b: T, theta: T, rect: [T; 4]) -> T {
+    ellipse_rectangle_area_oriented(c, a, b, theta.portable_sin_cos(), rect)
+}
+
+/// [`ellipse_rectangle_area`] with the orientation given as `(sin θ, cos θ)` (evaluate them once for many
+/// cells); bitwise the same result for `theta.portable_sin_cos()`.
+pub fn ellipse_rectangle_area_oriented<T: Real>(
+    c: [T; 2],
+    a: T,
+    b: T,
+    (sin, cos): (T, T),
+    rect: [T; 4],
+) -> T {
     let [x0, x1, y0, y1] = rect;
     if !(a > T::zero()) || !(b > T::zero()) || !(x1 > x0) || !(y1 > y0) {
         return T::zero();
@@ -149,7 +161,6 @@ pub fn ellipse_rectangle_area<T: Real>(c: [T; 2], a: T, b: T, theta: T, rect: [T
     if x0 > c[0] + reach || x1 < c[0] - reach || y0 > c[1] + reach || y1 < c[1] - reach {
         return T::zero();
     }
-    let (sin, cos) = theta.portable_sin_cos();
     // Rectangle corners, counter-clockwise, mapped to the unit-disc frame (the map has positive determinant, so
     // the orientation is kept).
     let map = |x: T, y: T| {
@@ -166,8 +177,21 @@ pub fn ellipse_rectangle_area<T: Real>(c: [T; 2], a: T, b: T, theta: T, rect: [T
 
 /// Solid fraction of the unit cell centred on lattice point (x, y) covered by an ellipse, in [0, 1].
 pub fn ellipse_cell_fraction<T: Real>(c: [T; 2], a: T, b: T, theta: T, x: T, y: T) -> T {
+    ellipse_cell_fraction_oriented(c, a, b, theta.portable_sin_cos(), x, y)
+}
+
+/// [`ellipse_cell_fraction`] with the orientation given as `(sin θ, cos θ)`; bitwise the same result for
+/// `theta.portable_sin_cos()`.
+pub fn ellipse_cell_fraction_oriented<T: Real>(
+    c: [T; 2],
+    a: T,
+    b: T,
+    sin_cos: (T, T),
+    x: T,
+    y: T,
+) -> T {
     let h = T::lit(0.5);
-    ellipse_rectangle_area(c, a, b, theta, [x - h, x + h, y - h, y + h]).min(T::one())
+    ellipse_rectangle_area_oriented(c, a, b, sin_cos, [x - h, x + h, y - h, y + h]).min(T::one())
 }
 
 #[cfg(test)]
