@@ -32,6 +32,7 @@ fn run<T: Real>(
         .expect("rayon pool");
     let mut best: Option<StepTimings> = None;
     let mut covered = 0;
+    let mut healthy = true;
     for _ in 0..3 {
         let mut w = coupled_scene::coupled_world::<T>(dem, nx, ny, radius);
         let t = pool.install(|| {
@@ -45,6 +46,7 @@ fn run<T: Real>(
             *w.timings().expect("timings enabled")
         });
         covered = w.fluid.covered_nodes();
+        healthy &= w.fluid.health_check(0.9, 1.1).is_none();
         if best.is_none_or(|b| t.total() < b.total()) {
             best = Some(t);
         }
@@ -55,7 +57,7 @@ fn run<T: Real>(
     let mlups = (nx * ny) as f64 * steps as f64 / total.as_secs_f64() / 1e6;
     println!(
         "{precision} {threads}T r={radius}: {:.2} ms/step, {mlups:.1} MLUPS-eq | fluid {:.2} ms ({:.0} %) | \
-         coverage {:.2} ms ({:.0} %) | coupling {:.2} ms ({:.0} %) | dem {:.2} ms ({:.0} %) | covered nodes {covered}",
+         coverage {:.2} ms ({:.0} %) | coupling {:.2} ms ({:.0} %) | dem {:.2} ms ({:.0} %) | covered nodes {covered} | densities in [0.9, 1.1]: {healthy}",
         ms(total, steps),
         ms(t.fluid, steps),
         pct(t.fluid),

@@ -25,6 +25,8 @@ pub fn packed_grains() -> DemWorld<f64> {
     spec.growth_steps = 1000;
     spec.max_servo_steps = 6000;
     spec.stress_tolerance = 0.5;
+    // Bond pairs closer than a tenth of the smallest semi-major axis (the loose packing leaves small gaps).
+    spec.bond_gap = 7e-3;
     let bonds = BondSpec::Point {
         stiffness: 1e5,
         strength: 1e3,
