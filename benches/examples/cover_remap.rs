@@ -36,7 +36,7 @@ fn bodies(call: u64) -> Vec<CoupledBody<f64>> {
                 shape: BodyShape::Ellipse {
                     semi_major: a,
                     semi_minor: 0.5 * a,
-                    angle: 6.28 * unit(3 * k + 1) + drift,
+                    angle: std::f64::consts::TAU * unit(3 * k + 1) + drift,
                 },
             }
         })
@@ -80,9 +80,7 @@ fn main() {
     let wall = wall0.elapsed().as_secs_f64();
     let cpu = cpu_seconds() - cpu0;
     let eps = lattice.solid_fraction_map();
-    let checksum = eps
-        .iter()
-        .fold(0u64, |h, v| h.rotate_left(5) ^ v.to_bits());
+    let checksum = eps.iter().fold(0u64, |h, v| h.rotate_left(5) ^ v.to_bits());
     let tiny = eps.iter().filter(|&&v| v > 0.0 && v < 1e-9).count();
     let full = eps.iter().filter(|&&v| v == 1.0).count();
     println!(
