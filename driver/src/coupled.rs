@@ -14,6 +14,8 @@
 use lbdem_kernels::coupling::{BodyShape, CoupledBody};
 use lbdem_kernels::dem::shape::Shape;
 use lbdem_kernels::fluid::collide::Weighting;
+use lbdem_kernels::Real;
+use std::time::{Duration, Instant};
 
 use crate::error::{LbdemError, Result};
 use crate::lattice::FluidLattice;
@@ -46,10 +48,33 @@ impl LatticeMap {
     }
 }
 
-/// A fluid lattice and a DEM world advanced together.
-pub struct CoupledWorld {
+/// Wall-clock time spent in each stage of [`CoupledWorld::step`], accumulated over the steps taken while
+/// enabled (see [`CoupledWorld::enable_timings`]). For benchmarks; results never depend on it.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct StepTimings {
+    /// Steps accumulated.
+    pub steps: u64,
+    /// Grains to lattice units and re-mapping them onto the lattice (`cover_with_bodies`).
+    pub coverage: Duration,
+    /// Fluid step: collide (BGK and PSM at covered nodes) and stream.
+    pub fluid: Duration,
+    /// Reduction of the exchanged momentum to a force and torque per grain, and their conversion to DEM loads.
+    pub coupling: Duration,
+    /// DEM step(s).
+    pub dem: Duration,
+}
+
+impl StepTimings {
+    /// Sum of the stages.
+    pub fn total(&self) -> Duration {
+        self.coverage + self.fluid + self.coupling + self.dem
+    }
+}
+
+/// A fluid lattice (precision `T`, f64 by default) and a DEM world advanced together.
+pub struct CoupledWorld<T: Real = f64> {
     /// The fluid.
-    pub fluid: FluidLattice<f64>,
+    pub fluid: FluidLattice<T>,
     /// The grains, platens and bonds.
     pub dem: DemWorld<f64>,
     /// Unit conversion.
@@ -66,12 +91,13 @@ pub struct CoupledWorld {
     /// used for bands of changed pore-throat size (dissertation §6.8.1).
     pub grain_fluid_radius: Vec<f64>,
     steps: u64,
+    timings: Option<StepTimings>,
 }
 
-impl CoupledWorld {
+impl<T: Real> CoupledWorld<T> {
     /// Couple a fluid and a DEM world. The DEM step must be the fluid step divided by `substeps`.
     pub fn new(
-        fluid: FluidLattice<f64>,
+        fluid: FluidLattice<T>,
         mut dem: DemWorld<f64>,
         map: LatticeMap,
         fluid_radius: f64,
@@ -108,7 +134,18 @@ impl CoupledWorld {
             applied: vec![([0.0; 2], 0.0); n],
             grain_fluid_radius: Vec::new(),
             steps: 0,
+            timings: None,
         })
+    }
+
+    /// Start (or restart from zero) accumulating the time spent in each stage of [`CoupledWorld::step`].
+    pub fn enable_timings(&mut self) {
+        self.timings = Some(StepTimings::default());
+    }
+
+    /// Time accumulated per stage since [`CoupledWorld::enable_timings`] (`None` when not enabled).
+    pub fn timings(&self) -> Option<&StepTimings> {
+        self.timings.as_ref()
     }
 
     /// Coupled steps taken.
@@ -161,9 +198,17 @@ impl CoupledWorld {
 
     /// One coupled step: map grains → fluid step → fluid loads → DEM step(s).
     pub fn step(&mut self) {
+        let timed = self.timings.is_some();
+        let clock = || timed.then(Instant::now);
+        let lap = |start: Option<Instant>| start.map_or(Duration::ZERO, |t| t.elapsed());
+        let t0 = clock();
         let bodies = self.bodies();
         self.fluid.cover_with_bodies(&bodies, self.weighting);
+        let coverage = lap(t0);
+        let t0 = clock();
         self.fluid.step();
+        let fluid = lap(t0);
+        let t0 = clock();
         let centers: Vec<[f64; 2]> = bodies.iter().map(|b| b.center).collect();
         let (forces, torques) = self.fluid.solid_forces_and_torques(&centers);
         let m = &self.map;
@@ -173,8 +218,18 @@ impl CoupledWorld {
             self.dem.external_force[i] = [f[0] * force_scale + af[0], f[1] * force_scale + af[1]];
             self.dem.external_torque[i] = t * torque_scale + at;
         }
+        let coupling = lap(t0);
+        let t0 = clock();
         for _ in 0..self.substeps {
             self.dem.step();
+        }
+        let dem = lap(t0);
+        if let Some(t) = &mut self.timings {
+            t.steps += 1;
+            t.coverage += coverage;
+            t.fluid += fluid;
+            t.coupling += coupling;
+            t.dem += dem;
         }
         self.steps += 1;
     }

@@ -76,6 +76,7 @@ impl Persist for CoupledWorld {
             applied,
             grain_fluid_radius,
             steps,
+            timings: None,
         })
     }
 }
