@@ -327,12 +327,12 @@ pub fn csv(rows: &[StudyRow]) -> String {
 }
 
 fn percent(e: f64) -> String {
-    if e >= 0.01 {
-        format!("{:.2} %", 100.0 * e)
-    } else {
-        format!("{:.2e}", e)
-    }
+    format!("{e:.2e}")
 }
+
+/// Wall times closer than this ratio are not told apart in the recommendations (timing noise on a shared
+/// machine is of this order; the two precisions run the same steps).
+pub const TIMING_NOISE: f64 = 1.2;
 
 /// Markdown table of all runs.
 pub fn markdown_table(rows: &[StudyRow]) -> String {
@@ -393,11 +393,24 @@ pub fn recommendations(rows: &[StudyRow]) -> String {
         for b in BUDGETS {
             match cheapest(rows, p, b) {
                 Some(r) => {
+                    // The other precision at the same resolution, if it also meets the budget at about the
+                    // same wall time: then the choice of precision does not matter for this budget.
+                    let twin = rows.iter().find(|o| {
+                        o.problem == p
+                            && o.resolution == r.resolution
+                            && o.precision != r.precision
+                            && o.relative_error <= b
+                            && o.wall_seconds <= TIMING_NOISE * r.wall_seconds
+                    });
+                    let precision = match twin {
+                        Some(_) => "f32 or f64 (same wall time within timing noise)".to_string(),
+                        None => r.precision.to_string(),
+                    };
                     let _ = writeln!(
                         s,
                         "  - {} budget: {} at resolution {} ({} steps, {:.3} s, error {})",
                         budget_label(b),
-                        r.precision,
+                        precision,
                         r.resolution,
                         r.steps,
                         r.wall_seconds,
