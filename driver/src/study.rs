@@ -93,7 +93,8 @@ pub struct StudyPlan {
 }
 
 impl StudyPlan {
-    /// The full study (about 5 minutes in release mode on one core of the development machine).
+    /// The full study: 5–8 minutes in release mode with one thread on the shared 2-core development machine
+    /// (the l = 160 array and the 81-node body-force channel are two thirds of it).
     pub fn full() -> Self {
         Self {
             ladders: vec![
