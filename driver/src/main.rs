@@ -56,6 +56,28 @@ enum Command {
         #[arg(long)]
         out: PathBuf,
     },
+    /// Parameter studies over the validation problems.
+    Study {
+        #[command(subcommand)]
+        study: StudyCommand,
+    },
+}
+
+#[derive(Subcommand)]
+enum StudyCommand {
+    /// Error against wall time for the Poiseuille channels and the cylinder array, f32 and f64: writes
+    /// speed_vs_error.csv, .png and .md into --out and prints the markdown table and recommendations.
+    SpeedVsError {
+        /// Output directory (created if missing; the study's files in it are replaced).
+        #[arg(long)]
+        out: PathBuf,
+        /// Run only the coarse end of every resolution ladder (a few seconds).
+        #[arg(long)]
+        quick: bool,
+        /// Worker threads (default: all cores).
+        #[arg(long)]
+        threads: Option<usize>,
+    },
 }
 
 fn set_threads(threads: Option<usize>) -> bool {
@@ -100,6 +122,19 @@ fn main() -> ExitCode {
         }
         Command::Check { scene } => lbdem::run::check(&scene).map(|s| print!("{s}")),
         Command::CompareBreaks { dirs, out } => lbdem::fracture::compare_breaks(&dirs, &out),
+        Command::Study {
+            study:
+                StudyCommand::SpeedVsError {
+                    out,
+                    quick,
+                    threads,
+                },
+        } => {
+            if !set_threads(threads) {
+                return ExitCode::FAILURE;
+            }
+            lbdem::study::speed_vs_error(&out, quick, true).map(|md| print!("{md}"))
+        }
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -108,6 +108,7 @@ pub fn snapshot_png(
     };
     let width = 1400u32;
     let plot_h = ((width - 120) as f64 * (y1 - y0) / (x1 - x0)).clamp(100.0, 2000.0) as u32;
+    crate::plot::register_fonts();
     let root = BitMapBackend::new(path, (width, plot_h + 90)).into_drawing_area();
     root.fill(&WHITE)?;
     // Colour range over the pore fluid only (the fluid inside grains takes no part in the flow).
@@ -205,6 +206,7 @@ pub fn time_distance_png(
     if times.len() < 2 || xs.len() < 2 {
         return Err("fewer than two records: nothing to plot".into());
     }
+    crate::plot::register_fonts();
     let root = BitMapBackend::new(path, (1000, 700)).into_drawing_area();
     root.fill(&WHITE)?;
     let (vlo, vhi) = range(data.iter().flatten().copied());
@@ -261,6 +263,7 @@ pub fn time_distance_png(
 
 /// Rose diagram of crack-plane orientations (10° bins, mirrored: an axis has no sign), radius ∝ count.
 pub fn rose_png(path: &Path, rows: &[BreakRow]) -> FigureResult {
+    crate::plot::register_fonts();
     let root = BitMapBackend::new(path, (700, 740)).into_drawing_area();
     root.fill(&WHITE)?;
     let mut bins = [0usize; 18];
@@ -326,6 +329,7 @@ pub fn rose_png(path: &Path, rows: &[BreakRow]) -> FigureResult {
 
 /// Broken bonds against time for one or several runs, overlaid.
 pub fn breaks_png(path: &Path, series: &[(String, Vec<(f64, f64)>)]) -> FigureResult {
+    crate::plot::register_fonts();
     let root = BitMapBackend::new(path, (900, 600)).into_drawing_area();
     root.fill(&WHITE)?;
     let t1 = series
