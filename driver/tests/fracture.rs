@@ -188,43 +188,67 @@ fn base_test_breaks_bonds_into_fractures_perpendicular_to_the_least_stress() {
 
 #[test]
 fn permeability_study_follows_the_dissertations_trends() {
-    // Table 6.3 / fig. 6.13–6.14: as the fluid radius grows (0.6 → 0.95) the permeability falls by orders of
-    // magnitude and "high pressure resides longer in the lower permeability models". Asserted: the time for
-    // the mean pore pressure to fall below half the drop grows monotonically with the fluid radius.
-    let mut drain = Vec::new();
+    // Table 6.3: the fluid radius 0.6 → 0.725 → 0.8 → 0.95 lowers the intact sample's permeability over two
+    // orders of magnitude (1.2e-4, 7e-5, 2.39e-5, 1e-6 cm²), measured the same way here (steady Darcy flow
+    // through the intact sample before the drop). Asserted: k falls monotonically, and each k is within a
+    // factor 4 of table 6.3's. Why so loose: the sample is not the dissertation's (1560 randomly oriented
+    // grains per 7 × 3.5 cm against its ~1000, here a 2.4 × 1.2 cm cut of it) and the quick lattice is twice as
+    // coarse (2–5 nodes across a grain's minor axis), so only the order of magnitude carries over.
+    // Measured: 1.6e-4 at 0.6 and 2.3e-6 at 0.95.
+    // Damage (ch. 6.8): "as the diffusivity decreases, fluid pressure within the pore spaces is higher for a
+    // longer duration, providing more opportunity for fracture growth", and deformation becomes less localized.
+    // Asserted: the least permeable model breaks at least 20 % more bonds than the most permeable one
+    // (measured 84 against 42), and in every model the broken bonds' crack planes lie within 30° of
+    // perpendicular to σ₃ (as in the base test; measured 3–11°).
+    let table = [1.2e-4, 7e-5, 2.39e-5, 1e-6];
+    let mut k = Vec::new();
+    let mut breaks = Vec::new();
     let mut dirs = Vec::new();
-    for (name, fr) in [
+    for ((name, fr), k_table) in [
         ("base", 0.6),
         ("permeability_2", 0.725),
         ("permeability_3", 0.8),
         ("permeability_4", 0.95),
-    ] {
-        let (out, s) = run(name);
-        let h = history(&out);
-        let p0 = h[0][6];
-        let t_half = h
-            .iter()
-            .find(|r| r[6] < 0.5 * p0)
-            .map(|r| r[0])
-            .unwrap_or(f64::INFINITY);
+    ]
+    .into_iter()
+    .zip(table)
+    {
+        // Own output directories: the base test runs "base" at the same time.
+        let (out, s) = run_scene(&quick(name), &format!("study-{name}"));
+        let perm = s["results"]["permeability"]["permeability"]
+            .as_f64()
+            .expect("the quick permeability scenes measure k");
         let (b, total) = broken(&s);
+        let o = &s["results"]["orientation"];
         eprintln!(
-            "fluid radius {fr}: half-drainage time {t_half:.4e} s, {b} of {total} bonds broken"
+            "fluid radius {fr}: k = {perm:.3e} cm² (table 6.3: {k_table:.2e}), {b} of {total} bonds broken, {o}"
         );
-        drain.push(t_half);
+        assert!(
+            perm < 4.0 * k_table && perm > k_table / 4.0,
+            "fluid radius {fr}: k = {perm:.3e}, table 6.3 {k_table:.2e}"
+        );
+        // Crack planes of the broken bonds (the quick sample often holds a single, roundish damage zone whose
+        // principal axis says little; the base test checks the traces too).
+        let crack = o["crack_plane_deviation_from_perpendicular_to_sigma3_deg"]
+            .as_f64()
+            .unwrap_or(90.0);
+        assert!(crack <= 30.0, "fluid radius {fr}: crack planes {crack}° off");
+        k.push(perm);
+        breaks.push(b);
         dirs.push(out);
     }
+    for w in k.windows(2) {
+        assert!(w[1] < w[0], "permeability did not fall with the fluid radius: {k:?}");
+    }
+    assert!(
+        breaks[3] as f64 >= 1.2 * breaks[0] as f64,
+        "damage did not grow as the permeability fell: {breaks:?}"
+    );
     // The runs overlaid, as `lbdem compare-breaks` draws them.
     let png = out_dir("compare").with_extension("png");
     lbdem::fracture::compare_breaks(&dirs, &png).expect("comparison figure");
     let bytes = std::fs::read(&png).unwrap();
     assert!(bytes.starts_with(b"\x89PNG") && bytes.len() > 5000);
-    for w in drain.windows(2) {
-        assert!(
-            w[1] > w[0],
-            "drainage did not slow with fluid radius: {drain:?}"
-        );
-    }
 }
 
 /// The quick base scene shortened to `duration`, written to a scene file of its own.
@@ -237,6 +261,8 @@ fn short_scene(name: &str, duration: f64) -> PathBuf {
                 format!("duration = {duration}")
             } else if l.starts_with("snapshot_interval") {
                 "snapshot_interval = 0.0".to_string()
+            } else if l.starts_with("permeability") {
+                "permeability = false".to_string()
             } else {
                 l.to_string()
             }
