@@ -8,6 +8,7 @@ pub mod coupled;
 pub mod error;
 pub mod lattice;
 pub mod output;
+pub mod poro;
 pub mod porous;
 pub mod run;
 pub mod scene;

@@ -21,6 +21,9 @@ pub struct RunOptions {
 
 /// Validate a scene and print its derived parameters without running it.
 pub fn check(scene_path: &Path) -> Result<String> {
+    if let Some(poro) = crate::poro::PoroScene::load_if_poro(scene_path)? {
+        return poro.check(scene_path);
+    }
     if let Some(dry) = crate::solid::scene::DryScene::load_if_dry(scene_path)? {
         return dry.check(scene_path);
     }
@@ -45,6 +48,9 @@ pub fn check(scene_path: &Path) -> Result<String> {
 
 /// Run a scene, writing outputs into `out`. Returns the summary as JSON.
 pub fn run(scene_path: &Path, out: &Path, opts: &RunOptions) -> Result<serde_json::Value> {
+    if let Some(poro) = crate::poro::PoroScene::load_if_poro(scene_path)? {
+        return poro.run(scene_path, out, opts);
+    }
     if let Some(dry) = crate::solid::scene::DryScene::load_if_dry(scene_path)? {
         return dry.run(scene_path, out, opts.overwrite);
     }
