@@ -36,7 +36,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         restitution: 1.0,
         no_tension: true,
     };
-    let mut pk = boxed_sample(parts, model, 1.0, None, 0.0)?;
+    // DEM sub-steps so that Δt/substeps stays below the critical step for stiff contacts.
+    let substeps = (kn / 2.0).sqrt().ceil().max(1.0) as u32;
+    let mut pk = boxed_sample(parts, model, 1.0 / substeps as f64, None, 0.0)?;
     let (lo, hi) = pk.world.bounds();
     pk.world.platens[pk.sample_box.top].active = false;
     let tops = pk.world.boundary_particles(3, 0.5 * r);
@@ -73,7 +75,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         density: 1.0,
         origin: [lo[0] - 0.5, lo[1] - 0.5],
     };
-    let mut world = CoupledWorld::new(fluid, pk.world, map, 0.8, Weighting::NobleTorczynski, 1)?;
+    let mut world = CoupledWorld::new(
+        fluid,
+        pk.world,
+        map,
+        0.8,
+        Weighting::NobleTorczynski,
+        substeps,
+    )?;
     for &i in &tops {
         let share = sigma * width * world.dem.particles[i].shape.bounding_radius() / total_r;
         world.applied[i] = ([0.0, -share], 0.0);

@@ -79,6 +79,8 @@ pub enum PoroKind {
     PressureDiffusion,
     /// A closed fluid box compressed by a piston.
     FluidCompressibility,
+    /// Free grains under a step load, drained at the top (Terzaghi-type consolidation).
+    Consolidation,
 }
 
 /// `[scene]` of a poro scene.
@@ -157,6 +159,34 @@ pub struct CompressibilitySection {
     pub settle: f64,
 }
 
+/// `[consolidation]`
+#[derive(Clone, Debug, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct ConsolidationSection {
+    /// Grains per row of the hexagonal pack.
+    pub columns: usize,
+    /// Rows of the pack.
+    pub rows: usize,
+    /// Grain radius.
+    pub radius: f64,
+    /// Relative radius jitter in [0, 0.5).
+    pub jitter: f64,
+    /// Packing seed.
+    pub seed: u64,
+    /// Grain density (unit thickness).
+    pub grain_density: f64,
+    /// Fraction of each radius the fluid sees.
+    pub fluid_radius: f64,
+    /// Contact normal (= shear) stiffness, force/length.
+    pub normal_stiffness: f64,
+    /// Contact friction.
+    pub friction: f64,
+    /// Step load on the top row of grains (force per unit length).
+    pub load: f64,
+    /// Model time simulated.
+    pub duration: f64,
+}
+
 /// A whole poro scene file.
 #[derive(Clone, Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
@@ -174,6 +204,9 @@ pub struct PoroScene {
     /// `[fluid_compressibility]`
     #[serde(default)]
     pub fluid_compressibility: Option<CompressibilitySection>,
+    /// `[consolidation]`
+    #[serde(default)]
+    pub consolidation: Option<ConsolidationSection>,
 }
 
 #[derive(Deserialize)]
@@ -207,7 +240,10 @@ impl PoroScene {
             Ok(k)
                 if matches!(
                     k.scene.kind.as_str(),
-                    "terminal_velocity" | "pressure_diffusion" | "fluid_compressibility"
+                    "terminal_velocity"
+                        | "pressure_diffusion"
+                        | "fluid_compressibility"
+                        | "consolidation"
                 ) =>
             {
                 Self::from_toml(&text, &p).map(Some)
@@ -245,6 +281,70 @@ impl PoroScene {
         positive("fluid.spacing", self.fluid.spacing, "lattice spacing h")?;
         let u = LatticeUnits::from_fluid(&self.fluid)?;
         match self.scene.kind {
+            PoroKind::Consolidation => {
+                let c = self
+                    .consolidation
+                    .as_ref()
+                    .ok_or_else(|| missing("consolidation"))?;
+                positive("consolidation.radius", c.radius, "grain radius")?;
+                positive("consolidation.grain_density", c.grain_density, "e.g. 2.65")?;
+                positive(
+                    "consolidation.normal_stiffness",
+                    c.normal_stiffness,
+                    "contact stiffness, force/length",
+                )?;
+                positive("consolidation.load", c.load, "step load")?;
+                positive("consolidation.duration", c.duration, "model time")?;
+                if c.columns < 2 || c.rows < 2 {
+                    return Err(LbdemError::field(
+                        "consolidation.columns/rows",
+                        format!("{} x {}", c.columns, c.rows),
+                        "need at least 2 x 2 grains",
+                        "e.g. 10 x 8",
+                    ));
+                }
+                if !(c.jitter >= 0.0 && c.jitter < 0.5) {
+                    return Err(LbdemError::field(
+                        "consolidation.jitter",
+                        c.jitter,
+                        "must lie in [0, 0.5)",
+                        "e.g. 0.05",
+                    ));
+                }
+                if !(c.fluid_radius > 0.0 && c.fluid_radius <= 1.0) {
+                    return Err(LbdemError::field(
+                        "consolidation.fluid_radius",
+                        c.fluid_radius,
+                        "must lie in (0, 1]",
+                        "the dissertation uses 0.6-0.95",
+                    ));
+                }
+                if !(c.friction >= 0.0 && c.friction.is_finite()) {
+                    return Err(LbdemError::field(
+                        "consolidation.friction",
+                        c.friction,
+                        "must be >= 0",
+                        "e.g. 0.5",
+                    ));
+                }
+                let drho = u.pressure_to_density_change(c.load);
+                if drho > 0.01 {
+                    return Err(LbdemError::field(
+                        "consolidation.load",
+                        c.load,
+                        &format!("gives a lattice density change {drho:.3e} > 1e-2 if the fluid carries it"),
+                        "lower the load, or shorten fluid.timestep",
+                    ));
+                }
+                if u.length_to_lattice(c.radius) * c.fluid_radius < 2.0 {
+                    return Err(LbdemError::field(
+                        "consolidation.radius",
+                        c.radius,
+                        "is seen by the fluid as fewer than 2 lattice spacings",
+                        "refine fluid.spacing",
+                    ));
+                }
+            }
             PoroKind::TerminalVelocity => {
                 let t = self
                     .terminal_velocity
@@ -413,6 +513,19 @@ impl PoroScene {
         let mut w = Warnings::default();
         check_tau(&u, &mut w);
         match self.scene.kind {
+            PoroKind::Consolidation => {
+                if let Some(c) = &self.consolidation {
+                    s += &format!(
+                        "  {} x {} grains of radius {:.2} nodes; stiffness {:.4e}, load {:.4e} (lattice); {} steps\n",
+                        c.columns,
+                        c.rows,
+                        u.length_to_lattice(c.radius),
+                        u.force_to_lattice(c.normal_stiffness) * u.spacing,
+                        u.force_to_lattice(c.load) * u.spacing,
+                        u.time_to_steps(c.duration).round()
+                    );
+                }
+            }
             PoroKind::TerminalVelocity => {
                 if let Some(t) = &self.terminal_velocity {
                     let n = u.length_to_lattice(t.cell).round();
@@ -473,6 +586,21 @@ impl PoroScene {
         eprint!("{}", self.describe()?);
         let units = self.units()?;
         let (result, files): (serde_json::Value, Vec<(&str, String)>) = match self.scene.kind {
+            PoroKind::Consolidation => {
+                let o = run_consolidation(self)?;
+                eprintln!(
+                    "lbdem: bottom pore pressure peaks at {:.4} x load at t = {:.4e} ({} DEM sub-steps per fluid step)",
+                    o.peak_pressure, o.peak_time, o.substeps
+                );
+                let series = csv(
+                    &["time", "bottom_pressure_over_load"],
+                    o.series.iter().map(|r| r.to_vec()),
+                );
+                (
+                    serde_json::to_value(&o).unwrap_or_default(),
+                    vec![("series.csv", series)],
+                )
+            }
             PoroKind::TerminalVelocity => {
                 let o = run_terminal_velocity(self)?;
                 eprintln!(
@@ -1289,5 +1417,151 @@ pub fn run_compressibility(scene: &PoroScene) -> Result<CompressibilityOutcome> 
         force_based,
         force_based_error: force_based / expected - 1.0,
         stress_ripple: (f_max - f_min) / fx,
+    })
+}
+
+// ---------------------------------------------------------------------------------------------------------
+// Consolidation
+
+/// Outcome of [`run_consolidation`].
+#[derive(Clone, Debug, Serialize)]
+pub struct ConsolidationOutcome {
+    /// Lattice size.
+    pub nodes: [usize; 2],
+    /// DEM sub-steps per fluid step.
+    pub substeps: u32,
+    /// Peak of the bottom pore pressure over the load.
+    pub peak_pressure: f64,
+    /// Time of the peak (physical).
+    pub peak_time: f64,
+    /// Bottom pore pressure over the load at the end.
+    pub final_pressure: f64,
+    /// (physical time, bottom pore pressure / load) every 10 fluid steps.
+    pub series: Vec<[f64; 2]>,
+}
+
+/// Run the consolidation case (dissertation §5.6.4, fig. 5.11–5.13): a hexagonal pack of free grains in a box
+/// of DEM platens with the top platen removed, a step load on the top row of grains (as forces, so the load is
+/// applied at once whatever the stiffness; a servo platen's loading rate ∝ 1/k_n would bias the trend), fluid
+/// walls west/east/south and a drained top (Zou–He P = 0) above the grains. Solid operator **Ω₁**: Ω₃ is
+/// unstable for free grains ([`omega3_free_grain_growth`]). The pore pressure is the fluid-only (ε = 0) mean
+/// in the bottom grain-diameter of the pack. The DEM is sub-stepped to stay below its critical step.
+pub fn run_consolidation(scene: &PoroScene) -> Result<ConsolidationOutcome> {
+    let c = scene
+        .consolidation
+        .as_ref()
+        .ok_or_else(|| missing("consolidation"))?;
+    let u = scene.units()?;
+    let h = u.spacing;
+    let parts = crate::solid::hexagonal_packing(
+        c.columns,
+        c.rows,
+        c.radius,
+        1.0,
+        c.jitter,
+        c.grain_density,
+        c.seed,
+    );
+    let model = ContactModel {
+        normal_stiffness: c.normal_stiffness,
+        shear_stiffness: c.normal_stiffness,
+        friction: c.friction,
+        restitution: 1.0,
+        no_tension: true,
+    };
+    // Critical step first (with a tiny step that always passes), then the sub-step count.
+    let probe = crate::solid::DemWorld::new(parts.clone(), model, 1e-300)?;
+    let critical = probe.critical_time_step();
+    let substeps = (u.timestep / (0.5 * critical)).ceil().max(1.0) as u32;
+    let mut pk = crate::solid::boxed_sample(parts, model, u.timestep / substeps as f64, None, 0.0)?;
+    let (lo, hi) = pk.world.bounds();
+    pk.world.platens[pk.sample_box.top].active = false;
+    let tops = pk.world.boundary_particles(3, 0.5 * c.radius);
+    let width = hi[0] - lo[0];
+    let total_r: f64 = tops
+        .iter()
+        .map(|&i| pk.world.particles[i].shape.bounding_radius())
+        .sum();
+    let nx = (width / h).round() as usize;
+    let probe_rows = ((2.0 * c.radius / h).round() as usize).max(1);
+    let ny = ((hi[1] - lo[1]) / h).round() as usize + probe_rows;
+    let mut fluid = FluidLattice::<f64>::new(
+        nx,
+        ny,
+        Boundaries {
+            west: SideCondition::Wall,
+            east: SideCondition::Wall,
+            south: SideCondition::Wall,
+            north: SideCondition::Pressure { density: 1.0 },
+        },
+        FluidParams {
+            tau: u.tau,
+            force: [0.0; 2],
+        },
+    )?;
+    fluid.set_solid_operator(SolidOperator::NonEquilibriumBounceBack);
+    let map = LatticeMap {
+        spacing: h,
+        timestep: u.timestep,
+        density: scene.fluid.density,
+        origin: [lo[0] - 0.5 * h, lo[1] - 0.5 * h],
+    };
+    let mut world = CoupledWorld::new(
+        fluid,
+        pk.world,
+        map,
+        c.fluid_radius,
+        Weighting::NobleTorczynski,
+        substeps,
+    )?;
+    for &i in &tops {
+        let share = c.load * width * world.dem.particles[i].shape.bounding_radius() / total_r;
+        world.applied[i] = ([0.0, -share], 0.0);
+    }
+    let load = u.pressure_to_density_change(c.load); // as a lattice density change
+    let steps = u.time_to_steps(c.duration).round().max(10.0) as u64;
+    let mut series = Vec::new();
+    let mut peak = (0.0, f64::NEG_INFINITY);
+    for s in 1..=steps {
+        world.step();
+        if s.is_multiple_of(10) {
+            let eps = world.fluid.solid_fraction_map();
+            let (rho, _) = world.fluid.moments();
+            let (mut sum, mut n) = (0.0, 0usize);
+            for y in 0..probe_rows {
+                for x in 0..nx {
+                    let i = y * nx + x;
+                    if eps[i] == 0.0 {
+                        sum += rho[i];
+                        n += 1;
+                    }
+                }
+            }
+            let p = (sum / n.max(1) as f64 - 1.0) / load;
+            if !p.is_finite() {
+                return Err(LbdemError::Diverged {
+                    step: s,
+                    quantity: "bottom pore pressure".into(),
+                    value: format!("{p}"),
+                    x: 0,
+                    y: 0,
+                    out: String::new(),
+                    hint: "lower the load or the stiffness".into(),
+                });
+            }
+            let t = s as f64 * u.timestep;
+            if p > peak.1 {
+                peak = (t, p);
+            }
+            series.push([t, p]);
+        }
+    }
+    Ok(ConsolidationOutcome {
+        nodes: [nx, ny],
+        substeps,
+        peak_pressure: peak.1,
+        peak_time: peak.0,
+        final_pressure: series.last().map_or(f64::NAN, |r| r[1]),
+        series,
     })
 }
