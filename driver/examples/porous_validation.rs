@@ -69,6 +69,8 @@ fn drag_rows(
             };
             let tol = if asserted && op == SolidOperatorChoice::MovingWall {
                 "≤ 2.5 % (asserted)".to_string()
+            } else if asserted && op == SolidOperatorChoice::Linearized {
+                format!("{class} (asserted, as Ω₁)")
             } else if asserted {
                 format!("{class} (asserted)")
             } else {
@@ -173,6 +175,13 @@ fn main() {
         &[0.2, 0.4],
         0.8,
         SolidOperatorChoice::MovingWall,
+        true,
+    );
+    drag_rows(
+        &[20, 40],
+        &[0.2, 0.4],
+        0.8,
+        SolidOperatorChoice::Linearized,
         true,
     );
     reynolds_rows(40, &[0.01, 1.0, 10.0], 0.011, 0.6);

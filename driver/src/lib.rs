@@ -13,6 +13,7 @@ pub mod lattice;
 pub mod longrun;
 pub mod output;
 pub mod plot;
+pub mod poro;
 pub mod porous;
 pub mod resume;
 pub mod run;

@@ -24,6 +24,9 @@ pub fn check(scene_path: &Path) -> Result<String> {
     if let Some(f) = crate::fracture::FractureScene::load_if_fracture(scene_path)? {
         return f.check(scene_path);
     }
+    if let Some(poro) = crate::poro::PoroScene::load_if_poro(scene_path)? {
+        return poro.check(scene_path);
+    }
     if let Some(dry) = crate::solid::scene::DryScene::load_if_dry(scene_path)? {
         return dry.check(scene_path);
     }
@@ -54,6 +57,9 @@ pub fn check(scene_path: &Path) -> Result<String> {
 pub fn run(scene_path: &Path, out: &Path, opts: &RunOptions) -> Result<serde_json::Value> {
     if let Some(f) = crate::fracture::FractureScene::load_if_fracture(scene_path)? {
         return f.run(scene_path, out, opts.overwrite, opts.quiet);
+    }
+    if let Some(poro) = crate::poro::PoroScene::load_if_poro(scene_path)? {
+        return poro.run(scene_path, out, opts);
     }
     if let Some(dry) = crate::solid::scene::DryScene::load_if_dry(scene_path)? {
         let opts = crate::solid::scene::DryRunOptions {

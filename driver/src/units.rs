@@ -125,6 +125,57 @@ impl LatticeUnits {
         f * self.density * self.spacing.powi(3) / (self.timestep * self.timestep)
     }
 
+    /// Physical length → lattice lengths (nodes): l / h.
+    pub fn length_to_lattice(&self, l: f64) -> f64 {
+        l / self.spacing
+    }
+
+    /// Physical time → lattice steps: t / Δt.
+    pub fn time_to_steps(&self, t: f64) -> f64 {
+        t / self.timestep
+    }
+
+    /// Physical force per unit thickness → lattice force F Δt²/(ρ₀ h³) (inverse of [`Self::force_to_physical`]).
+    pub fn force_to_lattice(&self, f: f64) -> f64 {
+        f * self.timestep * self.timestep / (self.density * self.spacing.powi(3))
+    }
+
+    /// Physical mass per unit thickness → lattice mass m/(ρ₀ h²).
+    pub fn mass_to_lattice(&self, m: f64) -> f64 {
+        m / (self.density * self.spacing * self.spacing)
+    }
+
+    /// Lattice diffusivity (nodes²/step) → physical diffusivity c* h²/Δt.
+    pub fn diffusivity_to_physical(&self, c: f64) -> f64 {
+        c * self.spacing * self.spacing / self.timestep
+    }
+
+    /// Lattice permeability (nodes²) → physical permeability k* h².
+    pub fn permeability_to_physical(&self, k: f64) -> f64 {
+        k * self.spacing * self.spacing
+    }
+
+    /// Physical pressure → lattice density change Δρ* = p/(ρ₀ c_s²) (p = c_s² ρ, eq. 4.3).
+    pub fn pressure_to_density_change(&self, p: f64) -> f64 {
+        3.0 * self.pressure_to_lattice(p)
+    }
+
+    /// Every derived figure, one per line, for `check`/`run` start-up output.
+    pub fn describe(&self, length: &str, time: &str, pressure: &str) -> String {
+        format!(
+            "  lattice spacing h = {:e} {length}, time step dt = {:e} {time}, tau = {:.6}\n  \
+             lattice viscosity nu* = {:.6}, lattice speed c = h/dt = {:e} {length}/{time}, sound speed c_s = {:e} \
+             {length}/{time}\n  fluid compressibility beta = 1/(rho0 c_s^2) = {:e} 1/({pressure})\n",
+            self.spacing,
+            self.timestep,
+            self.tau,
+            self.lattice_viscosity,
+            self.lattice_speed,
+            self.sound_speed,
+            self.compressibility
+        )
+    }
+
     /// Mach number of a physical speed: u / c_s.
     pub fn mach(&self, u: f64) -> f64 {
         u / self.sound_speed

@@ -232,13 +232,19 @@ fn permeability_study_follows_the_dissertations_trends() {
         let crack = o["crack_plane_deviation_from_perpendicular_to_sigma3_deg"]
             .as_f64()
             .unwrap_or(90.0);
-        assert!(crack <= 30.0, "fluid radius {fr}: crack planes {crack}° off");
+        assert!(
+            crack <= 30.0,
+            "fluid radius {fr}: crack planes {crack}° off"
+        );
         k.push(perm);
         breaks.push(b);
         dirs.push(out);
     }
     for w in k.windows(2) {
-        assert!(w[1] < w[0], "permeability did not fall with the fluid radius: {k:?}");
+        assert!(
+            w[1] < w[0],
+            "permeability did not fall with the fluid radius: {k:?}"
+        );
     }
     assert!(
         breaks[3] as f64 >= 1.2 * breaks[0] as f64,

@@ -206,11 +206,15 @@ pub fn deviation_from_vertical(deg: f64) -> f64 {
 }
 
 /// Orientation statistics for the summary: the crack planes of all breaks, and the fracture traces weighted by
-/// length, each as mean angle, resultant length and deviation from perpendicular to σ₃ (vertical).
+/// length × (1 − elongation) (a round cloud of breaks has no trace direction), each as mean angle, resultant
+/// length and deviation from perpendicular to σ₃ (vertical).
 pub fn orientation_summary(rows: &[BreakRow], fractures: &[Fracture]) -> serde_json::Value {
     let cracks: Vec<(f64, f64)> = rows.iter().map(|r| (r.crack_deg, 1.0)).collect();
     let (crack_mean, crack_r) = axial_mean(&cracks);
-    let traces: Vec<(f64, f64)> = fractures.iter().map(|f| (f.trace_deg, f.length)).collect();
+    let traces: Vec<(f64, f64)> = fractures
+        .iter()
+        .map(|f| (f.trace_deg, f.length * (1.0 - f.elongation).max(0.0)))
+        .collect();
     let (trace_mean, trace_r) = axial_mean(&traces);
     let tension = rows.iter().filter(|r| r.mode == 0).count();
     serde_json::json!({

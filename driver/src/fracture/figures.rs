@@ -275,7 +275,7 @@ pub fn rose_png(path: &Path, rows: &[BreakRow]) -> FigureResult {
     let mut chart = ChartBuilder::on(&root)
         .caption(
             format!(
-                "crack-plane orientations of {} broken bonds (0° = long axis, σ3; 90° = perpendicular to σ3)",
+                "crack-plane orientations of {} broken bonds (0° = long axis = least stress; 90° = perpendicular to it)",
                 rows.len()
             ),
             ("sans-serif", 15),
