@@ -1784,3 +1784,56 @@ fn apply_axial(w: &mut DemWorld<f64>, ends: &[Vec<usize>; 2], stress: f64, heigh
     spread_axial(w, ends, stress, height, &mut forces);
     w.external_force = forces;
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn scene_with_bands(bands: &str) -> FractureScene {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/fracture/quick/base.toml");
+        let text = std::fs::read_to_string(path).unwrap() + bands;
+        FractureScene::from_toml(&text, "test.toml").expect("valid scene")
+    }
+
+    #[test]
+    fn heterogeneity_bands_select_the_grains_within_half_a_width_of_their_centre_line() {
+        // Sample from x = 0 (left end) with its bottom at y = 0: mid-height y = 0.6 for the 1.2 cm quick sample.
+        let s = scene_with_bands(
+            "\n[[heterogeneity]]\nfluid_radius = 0.95\ncenter = 1.2\nwidth = 0.4\n\
+             \n[[heterogeneity]]\nfluid_radius = 0.7\ncenter = 0.5\nwidth = 0.2\nangle = 45.0\n",
+        );
+        // Vertical band: |x − 1.2| ≤ 0.2 at any height.
+        assert_eq!(s.band_radius(1.2, 0.0, 0.0, 0.0), Some(0.95));
+        assert_eq!(s.band_radius(1.39, 1.1, 0.0, 0.0), Some(0.95));
+        assert_eq!(s.band_radius(1.41, 0.6, 0.0, 0.0), None);
+        // 45° band through (0.5, 0.6): its centre line passes (0.5 + d, 0.6 + d); half-width 0.1 across it.
+        assert_eq!(s.band_radius(0.8, 0.9, 0.0, 0.0), Some(0.7));
+        assert_eq!(
+            s.band_radius(0.5, 0.9, 0.0, 0.0),
+            None,
+            "0.21 across the band"
+        );
+        // Offsets of the sample's left end and bottom shift the bands with it.
+        assert_eq!(s.band_radius(11.2, 5.0, 10.0, 5.0), Some(0.95));
+    }
+
+    #[test]
+    fn bands_need_a_fluid_and_a_radius_in_range() {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/fracture/quick/dry.toml");
+        let text = std::fs::read_to_string(path).unwrap()
+            + "\n[[heterogeneity]]\nfluid_radius = 0.95\ncenter = 1.2\nwidth = 0.4\n";
+        let err = FractureScene::from_toml(&text, "t.toml")
+            .err()
+            .unwrap()
+            .to_string();
+        assert!(err.contains("heterogeneity"), "{err}");
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/fracture/quick/base.toml");
+        let text = std::fs::read_to_string(path).unwrap()
+            + "\n[[heterogeneity]]\nfluid_radius = 0.0\ncenter = 1.2\nwidth = 0.4\n";
+        let err = FractureScene::from_toml(&text, "t.toml")
+            .err()
+            .unwrap()
+            .to_string();
+        assert!(err.contains("heterogeneity[0].fluid_radius"), "{err}");
+    }
+}
