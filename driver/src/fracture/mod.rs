@@ -651,6 +651,9 @@ pub struct FractureRun<'a> {
     scene: &'a FractureScene,
     state: FractureState,
     started: Instant,
+    /// Steps done when this process took the run over (0, or the checkpoint's step on resume): the wall time
+    /// and throughput in `summary.json` are those of this segment.
+    steps_at_start: u64,
 }
 
 /// The persistent state of a fracture run.
@@ -865,6 +868,7 @@ pub fn resume_fracture(dir: &Path, quiet: bool) -> Result<serde_json::Value> {
         scene: &scene,
         state,
         started: Instant::now(),
+        steps_at_start: h.step,
     };
     drive(run, &text, dir, quiet, None)
 }
@@ -1026,6 +1030,7 @@ impl<'a> FractureRun<'a> {
                 prep_seconds: 0.0,
             },
             started: Instant::now(),
+            steps_at_start: 0,
         };
         match &scene.fluid {
             None => {
@@ -1663,9 +1668,10 @@ impl<'a> FractureRun<'a> {
                 "fluid_mass": fp.world.fluid.mass(),
             })
         });
-        let node_updates = self.fluid().map(|fp| {
-            (fp.setup.nodes[0] * fp.setup.nodes[1]) as f64 * self.state.steps_done as f64
-        });
+        let segment = self.state.steps_done.saturating_sub(self.steps_at_start);
+        let node_updates = self
+            .fluid()
+            .map(|fp| (fp.setup.nodes[0] * fp.setup.nodes[1]) as f64 * segment as f64);
         let summary = json!({
             "scene": self.scene,
             "packing": self.state.packed,
@@ -1675,7 +1681,8 @@ impl<'a> FractureRun<'a> {
             "timestep": self.state.dt,
             "preparation_seconds": self.state.prep_seconds,
             "wall_seconds": seconds,
-            "steps_per_second": self.state.steps_done as f64 / seconds.max(1e-9),
+            "segment_steps": segment,
+            "steps_per_second": segment as f64 / seconds.max(1e-9),
             "coupled_mlups": node_updates.map(|n| n / seconds.max(1e-9) / 1e6),
             "results": {
                 "broken_bonds": d.breaks.len(),
