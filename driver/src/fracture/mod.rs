@@ -1365,6 +1365,26 @@ impl<'a> FractureRun<'a> {
         Ok(())
     }
 
+    /// A lattice of the run's size and τ with Zou–He densities `west`, `east` at the ends, walls on the platens,
+    /// and the run's solid operator (for the intact-sample measurements, which cover it with fixed grains).
+    fn fixed_grain_lattice(&self, west: f64, east: f64) -> Result<FluidLattice<f64>> {
+        let fp = self.fluid().expect("fluid");
+        let [nx, ny] = fp.setup.nodes;
+        let bc = Boundaries {
+            west: SideCondition::Pressure { density: west },
+            east: SideCondition::Pressure { density: east },
+            south: SideCondition::Wall,
+            north: SideCondition::Wall,
+        };
+        let params = FluidParams {
+            tau: fp.setup.units.tau,
+            force: [0.0; 2],
+        };
+        let mut lattice = FluidLattice::new(nx, ny, bc, params)?;
+        lattice.set_solid_operator(fp.world.fluid.solid_operator());
+        Ok(lattice)
+    }
+
     /// Steady Darcy flow through the intact sample (table 6.3's method): grains fixed, a small pressure
     /// difference across the ends, run until the flux settles; k = μ q L/Δp with q the superficial flux.
     fn measure_permeability(&self) -> Result<serde_json::Value> {
@@ -1373,26 +1393,7 @@ impl<'a> FractureRun<'a> {
         let [nx, ny] = setup.nodes;
         let units = setup.units;
         let drho = 1e-3;
-        let bc = Boundaries {
-            west: SideCondition::Pressure {
-                density: 1.0 + 0.5 * drho,
-            },
-            east: SideCondition::Pressure {
-                density: 1.0 - 0.5 * drho,
-            },
-            south: SideCondition::Wall,
-            north: SideCondition::Wall,
-        };
-        let mut lattice = FluidLattice::new(
-            nx,
-            ny,
-            bc,
-            FluidParams {
-                tau: units.tau,
-                force: [0.0; 2],
-            },
-        )?;
-        lattice.set_solid_operator(fp.world.fluid.solid_operator());
+        let mut lattice = self.fixed_grain_lattice(1.0 + 0.5 * drho, 1.0 - 0.5 * drho)?;
         let mut bodies = fp.world.bodies();
         for b in &mut bodies {
             b.velocity = [0.0; 2];
@@ -1462,23 +1463,8 @@ impl<'a> FractureRun<'a> {
         let [nx, ny] = fp.setup.nodes;
         let units = fp.setup.units;
         let p0 = 1e-3;
-        let bc = Boundaries {
-            west: SideCondition::Pressure { density: 1.0 },
-            east: SideCondition::Pressure { density: 1.0 },
-            south: SideCondition::Wall,
-            north: SideCondition::Wall,
-        };
-        let mut lattice = FluidLattice::new(
-            nx,
-            ny,
-            bc,
-            FluidParams {
-                tau: units.tau,
-                force: [0.0; 2],
-            },
-        )?;
+        let mut lattice = self.fixed_grain_lattice(1.0, 1.0)?;
         lattice.fill_equilibrium(|_, _| (1.0 + p0, [0.0; 2]));
-        lattice.set_solid_operator(fp.world.fluid.solid_operator());
         lattice.cover_with_bodies(bodies, fp.world.weighting);
         let eps = lattice.solid_fraction_map();
         // The sample's ends in lattice x.
