@@ -18,14 +18,16 @@
 //! lists what ran). The load average is printed before and after: on a shared machine, other processes make the
 //! 2-thread figures (triad and lattice alike) noisy, so repeat and compare runs with a low load.
 //!
-//! The workspace builds for the baseline x86-64 target (SSE2). `RUSTFLAGS="-C target-cpu=native"` (or
-//! `x86-64-v3`) before the command measures the same code with AVX2/AVX-512; results stay bitwise identical
-//! (Rust never contracts a·b + c into an FMA), only speed changes.
+//! The workspace builds for the baseline x86-64 target (SSE2), and the bulk pass is also compiled for AVX2 and
+//! AVX-512 and picked at run time (`lbdem::exec`); results are bitwise identical at every level. Every case
+//! runs at the widest level the CPU has; the 2048² BGK cases also run at the baseline level, so the table
+//! shows what the run-time dispatch gains.
 use std::collections::BTreeMap;
 use std::sync::Mutex;
 use std::time::{Duration, Instant};
 
 use criterion::{BenchmarkId, Criterion, Throughput};
+use lbdem::exec::SimdLevel;
 use lbdem::lattice::{FluidDisc, FluidLattice};
 use lbdem_kernels::fluid::boundary::Boundaries;
 use lbdem_kernels::fluid::collide::Weighting;
@@ -190,12 +192,17 @@ fn disc_grid(n: usize) -> Vec<FluidDisc> {
     discs
 }
 
-fn lattice_case(kind: &str, prec: &str, n: usize, threads: usize) -> String {
-    format!("{kind}/{prec}/{n}/{threads}t")
+fn lattice_case(kind: &str, prec: &str, n: usize, threads: usize, level: SimdLevel) -> String {
+    format!("{kind}/{prec}/{n}/{threads}t/{}", level.name())
 }
 
-fn bench_lattice<T: Real>(c: &mut Criterion, kind: &str, sizes: &[usize]) {
-    let mut group = c.benchmark_group(format!("{kind}/{}", T::NAME));
+fn bench_lattice<T: Real>(c: &mut Criterion, kind: &str, sizes: &[usize], level: SimdLevel) {
+    let suffix = if level == SimdLevel::detect() {
+        String::new()
+    } else {
+        format!("/{}", level.name())
+    };
+    let mut group = c.benchmark_group(format!("{kind}/{}{suffix}", T::NAME));
     group
         .sample_size(SAMPLES)
         .warm_up_time(Duration::from_secs(1))
@@ -206,6 +213,7 @@ fn bench_lattice<T: Real>(c: &mut Criterion, kind: &str, sizes: &[usize]) {
             let p = pool(threads);
             let mut lattice = p.install(|| {
                 let mut l = periodic_lattice::<T>(n);
+                l.set_simd(level).expect("level available");
                 if kind == "psm" {
                     l.cover_with_discs(&disc_grid(n), Weighting::NobleTorczynski);
                 }
@@ -222,7 +230,7 @@ fn bench_lattice<T: Real>(c: &mut Criterion, kind: &str, sizes: &[usize]) {
                     100.0 * covered
                 );
             }
-            let case = lattice_case(kind, T::NAME, n, threads);
+            let case = lattice_case(kind, T::NAME, n, threads, level);
             group.bench_function(
                 BenchmarkId::new(format!("{n}"), format!("{threads}t")),
                 |bench| {
@@ -262,34 +270,42 @@ fn print_summary() {
     println!();
     println!("=== D2Q9 two-lattice update (MLUPS: median and best of {SAMPLES} samples) ===");
     println!(
-        "{:<6} {:<4} {:>6} {:>7} {:>10} {:>10} {:>10} {:>7}",
-        "case", "prec", "size", "threads", "MLUPS", "best", "ceiling", "ratio"
+        "{:<6} {:<4} {:>6} {:>7} {:>9} {:>10} {:>10} {:>10} {:>7}",
+        "case", "prec", "size", "threads", "simd", "MLUPS", "best", "ceiling", "ratio"
     );
+    let mut levels = vec![SimdLevel::detect()];
+    if SimdLevel::detect() != SimdLevel::Baseline {
+        levels.push(SimdLevel::Baseline);
+    }
     for kind in ["bgk", "psm"] {
         for prec in ["f64", "f32"] {
             for n in [256, 1024, 2048] {
                 for threads in THREADS {
-                    let Some((t, best)) = sample_times(&lattice_case(kind, prec, n, threads))
-                    else {
-                        continue;
-                    };
-                    let mlups = (n * n) as f64 / t / 1e6;
-                    let mlups_best = (n * n) as f64 / best / 1e6;
-                    let bytes = if prec == "f64" { 144.0 } else { 72.0 };
-                    let (ceiling, ratio) = match bandwidth.get(&threads) {
-                        Some(gbs) => {
-                            let ceil = gbs * 1e3 / bytes;
-                            (
-                                format!("{ceil:10.1}"),
-                                format!("{:6.0}%", 100.0 * mlups / ceil),
-                            )
-                        }
-                        None => ("         -".to_string(), "      -".to_string()),
-                    };
-                    println!(
-                        "{kind:<6} {prec:<4} {:>6} {threads:>7} {mlups:>10.1} {mlups_best:>10.1} {ceiling} {ratio}",
-                        format!("{n}²")
+                    for &level in &levels {
+                        let Some((t, best)) =
+                            sample_times(&lattice_case(kind, prec, n, threads, level))
+                        else {
+                            continue;
+                        };
+                        let mlups = (n * n) as f64 / t / 1e6;
+                        let mlups_best = (n * n) as f64 / best / 1e6;
+                        let bytes = if prec == "f64" { 144.0 } else { 72.0 };
+                        let (ceiling, ratio) = match bandwidth.get(&threads) {
+                            Some(gbs) => {
+                                let ceil = gbs * 1e3 / bytes;
+                                (
+                                    format!("{ceil:10.1}"),
+                                    format!("{:6.0}%", 100.0 * mlups / ceil),
+                                )
+                            }
+                            None => ("         -".to_string(), "      -".to_string()),
+                        };
+                        println!(
+                        "{kind:<6} {prec:<4} {:>6} {threads:>7} {:>9} {mlups:>10.1} {mlups_best:>10.1} {ceiling} {ratio}",
+                        format!("{n}²"),
+                        level.name()
                     );
+                    }
                 }
             }
         }
@@ -309,10 +325,15 @@ fn main() {
     let load_before = load_average();
     let mut c = Criterion::default().configure_from_args();
     bench_triad(&mut c);
-    bench_lattice::<f64>(&mut c, "bgk", &[256, 1024, 2048]);
-    bench_lattice::<f32>(&mut c, "bgk", &[256, 1024, 2048]);
-    bench_lattice::<f64>(&mut c, "psm", &[1024]);
-    bench_lattice::<f32>(&mut c, "psm", &[1024]);
+    let widest = SimdLevel::detect();
+    bench_lattice::<f64>(&mut c, "bgk", &[256, 1024, 2048], widest);
+    bench_lattice::<f32>(&mut c, "bgk", &[256, 1024, 2048], widest);
+    if widest != SimdLevel::Baseline {
+        bench_lattice::<f64>(&mut c, "bgk", &[2048], SimdLevel::Baseline);
+        bench_lattice::<f32>(&mut c, "bgk", &[2048], SimdLevel::Baseline);
+    }
+    bench_lattice::<f64>(&mut c, "psm", &[1024], widest);
+    bench_lattice::<f32>(&mut c, "psm", &[1024], widest);
     c.final_summary();
     print_summary();
     println!(

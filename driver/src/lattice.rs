@@ -11,13 +11,14 @@ use lbdem_kernels::fluid::collide::{PsmParams, SolidOperator, SolidShare, Weight
 use lbdem_kernels::fluid::d2q9::{equilibrium, Q};
 use lbdem_kernels::fluid::lattice::{LatticeShape, Side};
 use lbdem_kernels::fluid::step::{
-    classify_special_nodes, collide_covered_nodes, gathered_moments, nodes_in_rows, planes_mut,
-    step_band, CoveredNodes, Domain, FluidParams, FLUID, SOLID,
+    classify_special_nodes, collide_covered_nodes, fix_special_nodes, gathered_moments,
+    nodes_in_rows, planes_mut, CoveredNodes, Domain, FluidParams, FLUID, SOLID,
 };
 use lbdem_kernels::Real;
 use rayon::prelude::*;
 
 use crate::error::{LbdemError, Result};
+use crate::exec::{bulk_band_exec, SimdLevel};
 
 mod persist;
 
@@ -39,6 +40,7 @@ pub struct FluidLattice<T: Real> {
     coverage: Option<Coverage<T>>,
     cover_scratch: CoverScratch,
     solid_operator: SolidOperator,
+    simd: SimdLevel,
 }
 
 /// Buffers kept between calls of [`FluidLattice::cover_with_bodies`]: the cells of each body, and per-node
@@ -182,6 +184,7 @@ impl<T: Real> FluidLattice<T> {
             coverage: None,
             cover_scratch: CoverScratch::default(),
             solid_operator: SolidOperator::default(),
+            simd: crate::exec::default_level(),
         };
         lattice.reclassify();
         lattice.fill_equilibrium(|_, _| (T::one(), [T::zero(); 2]));
@@ -213,7 +216,27 @@ impl<T: Real> FluidLattice<T> {
         self.steps
     }
 
-    /// Rows per parallel band (results do not depend on it; only speed does).
+    /// Instruction set of the bulk pass ([`crate::exec::default_level`] unless set).
+    pub fn simd(&self) -> SimdLevel {
+        self.simd
+    }
+
+    /// Choose the instruction set of the bulk pass. Results are bitwise the same at every level; only speed
+    /// changes. Refuses a level this CPU lacks.
+    pub fn set_simd(&mut self, simd: SimdLevel) -> Result<()> {
+        if !simd.available() {
+            return Err(LbdemError::field(
+                "simd",
+                simd.name(),
+                "is not supported by this CPU",
+                &format!("use {} or a narrower level", SimdLevel::detect().name()),
+            ));
+        }
+        self.simd = simd;
+        Ok(())
+    }
+
+    /// Rows per parallel band (default 8; results do not depend on it, only speed does).
     pub fn set_band_rows(&mut self, rows: usize) {
         self.band_rows = rows.max(1);
     }
@@ -509,6 +532,7 @@ impl<T: Real> FluidLattice<T> {
         let params = self.params;
         let special = &self.special;
         let band_rows = self.band_rows;
+        let simd = self.simd;
         let band_len = band_rows * shape.nx;
         let bands = shape.ny.div_ceil(band_rows);
         // Split the nine destination planes into row bands.
@@ -572,7 +596,8 @@ impl<T: Real> FluidLattice<T> {
             .for_each(|(y0, mut band, (lo, hi), exchange)| {
                 let y1 = (y0 + band_rows).min(shape.ny);
                 let sp = nodes_in_rows(&shape, special, y0, y1);
-                step_band(&domain, src, &mut band, y0, y1, &params, sp);
+                bulk_band_exec(simd, &shape, src, &mut band, y0, y1, &params);
+                fix_special_nodes(&domain, src, &mut band, y0, &params, sp);
                 if let (Some((nodes, offsets, shares, _)), Some(psm)) = (cov, psm.as_ref()) {
                     if hi > lo {
                         let covered = CoveredNodes {

@@ -8,6 +8,7 @@ pub mod checkpoint;
 pub mod coupled;
 pub mod coupled_demo;
 pub mod error;
+pub mod exec;
 pub mod fracture;
 pub mod lattice;
 pub mod longrun;

@@ -27,6 +27,10 @@ enum Command {
         /// Worker threads (default: all cores). Results are bitwise identical for any count.
         #[arg(long)]
         threads: Option<usize>,
+        /// Instruction set of the fluid's bulk pass (default: the widest this CPU has). Results are bitwise
+        /// identical at every level; only speed changes.
+        #[arg(long, value_parser = ["baseline", "avx2", "avx512"])]
+        simd: Option<String>,
         /// No progress bar.
         #[arg(long)]
         quiet: bool,
@@ -39,6 +43,10 @@ enum Command {
         /// Worker threads (default: all cores). Results are bitwise identical for any count.
         #[arg(long)]
         threads: Option<usize>,
+        /// Instruction set of the fluid's bulk pass (default: the widest this CPU has). Results are bitwise
+        /// identical at every level; only speed changes.
+        #[arg(long, value_parser = ["baseline", "avx2", "avx512"])]
+        simd: Option<String>,
         /// No progress bar.
         #[arg(long)]
         quiet: bool,
@@ -77,10 +85,24 @@ enum StudyCommand {
         /// Worker threads (default: all cores).
         #[arg(long)]
         threads: Option<usize>,
+        /// Instruction set of the fluid's bulk pass (default: the widest this CPU has). Results are bitwise
+        /// identical at every level; only speed changes.
+        #[arg(long, value_parser = ["baseline", "avx2", "avx512"])]
+        simd: Option<String>,
     },
 }
 
-fn set_threads(threads: Option<usize>) -> bool {
+fn configure(threads: Option<usize>, simd: Option<String>) -> bool {
+    if let Some(name) = simd {
+        let level = lbdem::exec::SimdLevel::from_name(&name);
+        if let Err(e) = level
+            .ok_or(format!("--simd {name}: unknown level"))
+            .and_then(lbdem::exec::set_default_level)
+        {
+            eprintln!("lbdem: error: {e}");
+            return false;
+        }
+    }
     if let Some(n) = threads {
         if let Err(e) = rayon::ThreadPoolBuilder::new()
             .num_threads(n.max(1))
@@ -101,9 +123,10 @@ fn main() -> ExitCode {
             out,
             overwrite,
             threads,
+            simd,
             quiet,
         } => {
-            if !set_threads(threads) {
+            if !configure(threads, simd) {
                 return ExitCode::FAILURE;
             }
             lbdem::longrun::install_interrupt_handler();
@@ -112,9 +135,10 @@ fn main() -> ExitCode {
         Command::Resume {
             dir,
             threads,
+            simd,
             quiet,
         } => {
-            if !set_threads(threads) {
+            if !configure(threads, simd) {
                 return ExitCode::FAILURE;
             }
             lbdem::longrun::install_interrupt_handler();
@@ -128,9 +152,10 @@ fn main() -> ExitCode {
                     out,
                     quick,
                     threads,
+                    simd,
                 },
         } => {
-            if !set_threads(threads) {
+            if !configure(threads, simd) {
                 return ExitCode::FAILURE;
             }
             lbdem::study::speed_vs_error(&out, quick, true).map(|md| print!("{md}"))

@@ -1,4 +1,6 @@
-//! Same scene ⇒ bitwise-identical results whatever the number of threads or the band size (DESIGN §4).
+//! Same scene ⇒ bitwise-identical results whatever the number of threads, the band size, or the instruction
+//! set the bulk pass is compiled for (DESIGN §4).
+use lbdem::exec::SimdLevel;
 use lbdem::lattice::{FluidDisc, FluidLattice};
 use lbdem_kernels::fluid::boundary::{Boundaries, SideCondition};
 use lbdem_kernels::fluid::collide::{SolidOperator, Weighting};
@@ -88,6 +90,89 @@ fn one_and_two_threads_give_bitwise_identical_results_f32() {
     let (b, fb) = run::<f32>(2, 4);
     assert!(bitwise_equal(&a, &b));
     assert_eq!(fa, fb);
+}
+
+/// Populations after `steps` steps of `lattice` run at `level`.
+fn run_at<T: Real>(mut lattice: FluidLattice<T>, level: SimdLevel, steps: usize) -> Vec<T> {
+    lattice.set_simd(level).expect("level available");
+    for _ in 0..steps {
+        lattice.step();
+    }
+    lattice.populations().to_vec()
+}
+
+/// A fully periodic, unforced lattice with a shear wave and an odd width (67 = 8·8 + 3), so the vectorised
+/// interior loop has a remainder at every vector width.
+fn periodic_wave<T: Real>() -> FluidLattice<T> {
+    let params = FluidParams {
+        tau: T::lit(0.53),
+        force: [T::zero(); 2],
+    };
+    let mut l = FluidLattice::new(67, 9, Boundaries::periodic(), params).unwrap();
+    l.fill_equilibrium(|x, y| {
+        let k = 2.0 * std::f64::consts::PI;
+        let ux = 0.05 * (k * y as f64 / 9.0).sin();
+        let uy = 0.03 * (k * x as f64 / 67.0).cos();
+        (
+            T::lit(1.0 + 0.01 * (k * x as f64 / 67.0).sin()),
+            [T::lit(ux), T::lit(uy)],
+        )
+    });
+    l
+}
+
+#[test]
+fn every_instruction_set_gives_bitwise_identical_results() {
+    let levels: Vec<SimdLevel> = SimdLevel::ALL
+        .into_iter()
+        .filter(|l| l.available())
+        .collect();
+    // The CI machines have AVX-512; elsewhere the comparison covers the levels the CPU has.
+    eprintln!("comparing levels {levels:?}");
+    let scene_ref64 = run_at(scene::<f64>(8), SimdLevel::Baseline, 150);
+    let scene_ref32 = run_at(scene::<f32>(8), SimdLevel::Baseline, 150);
+    let wave_ref64 = run_at(periodic_wave::<f64>(), SimdLevel::Baseline, 200);
+    let wave_ref32 = run_at(periodic_wave::<f32>(), SimdLevel::Baseline, 200);
+    // The runs did something: the wave has decayed from its initial state but is not at rest.
+    let rest = periodic_wave::<f64>().populations().to_vec();
+    assert!(!bitwise_equal(&rest, &wave_ref64));
+    for &level in &levels[1..] {
+        let name = level.name();
+        assert!(
+            bitwise_equal(&scene_ref64, &run_at(scene::<f64>(8), level, 150)),
+            "{name}: channel scene (f64) differs from the baseline"
+        );
+        assert!(
+            bitwise_equal(&scene_ref32, &run_at(scene::<f32>(8), level, 150)),
+            "{name}: channel scene (f32) differs from the baseline"
+        );
+        assert!(
+            bitwise_equal(&wave_ref64, &run_at(periodic_wave::<f64>(), level, 200)),
+            "{name}: periodic wave (f64) differs from the baseline"
+        );
+        assert!(
+            bitwise_equal(&wave_ref32, &run_at(periodic_wave::<f32>(), level, 200)),
+            "{name}: periodic wave (f32) differs from the baseline"
+        );
+    }
+}
+
+#[test]
+fn an_instruction_set_the_cpu_lacks_is_refused_with_the_option_named() {
+    for level in SimdLevel::ALL {
+        let mut l = periodic_wave::<f64>();
+        match l.set_simd(level) {
+            Ok(()) => assert!(level.available()),
+            Err(e) => {
+                assert!(!level.available());
+                assert!(e.to_string().contains("simd"), "{e}");
+            }
+        }
+        assert!(lbdem::exec::set_default_level(level).is_ok() == level.available());
+    }
+    // Leave the process default where it started (the widest level), for the other tests of this binary.
+    assert!(lbdem::exec::set_default_level(SimdLevel::detect()).is_ok());
+    assert_eq!(lbdem::exec::default_level(), SimdLevel::detect());
 }
 
 #[test]

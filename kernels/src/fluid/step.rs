@@ -277,7 +277,7 @@ fn pull_periodic<T: Real>(shape: &LatticeShape, src: &[&[T]; Q], x: usize, y: us
 
 /// The branch-free bulk pass over rows `y0..y1`: periodic pull + `collide` for every node, written into the
 /// band `dst` (each plane slice holds rows y0..y1). `collide` is applied in place to the gathered populations.
-#[inline]
+#[inline(always)]
 pub fn bulk_rows<T: Real, C: Fn(&mut [T; Q])>(
     shape: &LatticeShape,
     src: &[T],
@@ -463,18 +463,18 @@ pub fn collide_covered_nodes<T: Real>(
     }
 }
 
-/// One complete update of the rows y0..y1 (bulk, special nodes, covered nodes), for a lattice without moving
-/// solids. `special` must be the part of the [`classify_special_nodes`] list that lies in the band.
-pub fn step_band<T: Real>(
-    domain: &Domain<'_, T>,
+/// The bulk pass of a band with the fluid's collision (BGK, or BGK with Guo forcing when a force is set):
+/// [`bulk_rows`] with the collision chosen from `params`. Inlined into its caller, so a caller compiled
+/// with wider vector instructions (`#[target_feature]`) gets the whole loop in those instructions.
+#[inline(always)]
+pub fn bulk_band<T: Real>(
+    shape: &LatticeShape,
     src: &[T],
     dst: &mut [&mut [T]; Q],
     y0: usize,
     y1: usize,
     params: &FluidParams<T>,
-    special: &[u32],
 ) {
-    let shape = &domain.shape;
     let omega = T::one() / params.tau;
     if params.forced() {
         let force = params.force;
@@ -486,6 +486,20 @@ pub fn step_band<T: Real>(
             bgk_collide(f, omega)
         });
     }
+}
+
+/// One complete update of the rows y0..y1 (bulk, special nodes, covered nodes), for a lattice without moving
+/// solids. `special` must be the part of the [`classify_special_nodes`] list that lies in the band.
+pub fn step_band<T: Real>(
+    domain: &Domain<'_, T>,
+    src: &[T],
+    dst: &mut [&mut [T]; Q],
+    y0: usize,
+    y1: usize,
+    params: &FluidParams<T>,
+    special: &[u32],
+) {
+    bulk_band(&domain.shape, src, dst, y0, y1, params);
     fix_special_nodes(domain, src, dst, y0, params, special);
 }
 
