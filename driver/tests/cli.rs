@@ -155,3 +155,47 @@ fn check_prints_derived_parameters_without_running() {
         assert!(text.contains(needle), "missing {needle} in:\n{text}");
     }
 }
+
+#[test]
+fn every_simd_level_the_cpu_has_writes_the_same_profile_and_unknown_levels_are_refused() {
+    let dir = scratch("simd");
+    let scene = dir.join("scene.toml");
+    std::fs::write(&scene, GOOD).unwrap();
+    let mut profiles = Vec::new();
+    for level in ["baseline", "avx2", "avx512"] {
+        let out = dir.join(level);
+        let o = lbdem()
+            .args([
+                "run",
+                scene.to_str().unwrap(),
+                "--out",
+                out.to_str().unwrap(),
+            ])
+            .args(["--quiet", "--simd", level])
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        let available = lbdem::exec::SimdLevel::from_name(level).is_some_and(|l| l.available());
+        if available {
+            assert!(o.status.success(), "--simd {level} failed: {err}");
+            profiles.push(std::fs::read(out.join("profile.csv")).unwrap());
+        } else {
+            // A level the CPU lacks is refused with the option named, not run.
+            assert!(!o.status.success());
+            assert!(err.contains("--simd") && err.contains(level), "{err}");
+        }
+    }
+    assert!(!profiles.is_empty());
+    assert!(
+        profiles.windows(2).all(|w| w[0] == w[1]),
+        "profiles differ between instruction-set levels"
+    );
+    let o = lbdem()
+        .args(["run", scene.to_str().unwrap(), "--out"])
+        .arg(dir.join("bad"))
+        .args(["--simd", "sse9"])
+        .output()
+        .unwrap();
+    assert!(!o.status.success());
+    assert!(String::from_utf8_lossy(&o.stderr).contains("sse9"));
+}
