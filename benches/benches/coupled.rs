@@ -140,7 +140,7 @@ fn print_summary(grains: usize, bonds: usize) {
     println!();
     println!(
         "=== coupled step, {NX} x {NY} lattice, {grains} ellipse grains (aspect 0.5), {bonds} bonds, fluid radius \
-         {FLUID_RADIUS}, Ω₃ (median of {SAMPLES} samples) ==="
+         {FLUID_RADIUS}, Ω₁ₗ (median of {SAMPLES} samples) ==="
     );
     println!(
         "{:<4} {:>7} {:>9} {:>9} {:>8} {:>9} {:>9} {:>6} {:>8} {:>7}",

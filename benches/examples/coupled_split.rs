@@ -4,8 +4,7 @@
 //!
 //! `cargo run --release -p lbdem-benches --example coupled_split -- [nx] [ny] [steps] [fluid_radius]`
 //! (defaults 1000 500 10 0.7). Each configuration runs `steps` steps after 3 warm-up steps, repeated 3 times;
-//! the repeat with the smallest total is printed (least disturbed by other processes on a shared machine). Keep
-//! `steps` ≤ ~12: with Ω₃ the grains' velocities grow exponentially after ~15 steps (see `benches/coupled.rs`).
+//! the repeat with the smallest total is printed (least disturbed by other processes on a shared machine).
 #[path = "../src/coupled_scene.rs"]
 mod coupled_scene;
 

@@ -1,7 +1,7 @@
 //! The coupled benchmark scene (shared by `benches/coupled.rs` and `examples/coupled_split.rs` through
 //! `#[path]`): the fracture test's size, ~1000 bonded ellipse grains (aspect 0.5, the dissertation's ch. 6.6
 //! sizes) packed by [`generate_packing`] in a 2:1 box, mapped onto an `nx × ny` lattice spanning the box, a small
-//! pressure drop west → east (Zou–He), walls north and south, the Ω₃ solid operator (`BounceBack`).
+//! pressure drop west → east (Zou–He), walls north and south, the Ω₁ₗ solid operator (`LinearizedBounceBack`).
 use lbdem::coupled::{CoupledWorld, LatticeMap};
 use lbdem::lattice::FluidLattice;
 use lbdem::solid::packing::{generate_packing, PackingSpec};
@@ -37,7 +37,7 @@ pub fn packed_grains() -> DemWorld<f64> {
 }
 
 /// A coupled world on an `nx × ny` lattice (precision `T`) over the packing `dem`, fluid radius
-/// `fluid_radius`, solid operator Ω₃.
+/// `fluid_radius`, solid operator Ω₁ₗ.
 pub fn coupled_world<T: Real>(
     dem: &DemWorld<f64>,
     nx: usize,
