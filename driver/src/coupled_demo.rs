@@ -92,20 +92,11 @@ pub struct DemoScene {
     pub run: LongRunSection,
 }
 
-#[derive(Deserialize)]
-struct Peek {
-    scene: PeekHeader,
-}
-#[derive(Deserialize)]
-struct PeekHeader {
-    kind: String,
-}
-
 impl DemoScene {
     /// Parse `text` when its `[scene] kind` is "coupled_demo"; `None` otherwise.
     pub fn parse_if_demo(text: &str, path: &str) -> Result<Option<Self>> {
-        match toml::from_str::<Peek>(text) {
-            Ok(p) if p.scene.kind == DEMO_KIND => Self::from_toml(text, path).map(Some),
+        match crate::scene::peek_kind::<String>(text) {
+            Some(kind) if kind == DEMO_KIND => Self::from_toml(text, path).map(Some),
             _ => Ok(None),
         }
     }
@@ -402,10 +393,7 @@ pub fn run_if_demo(
     quiet: bool,
 ) -> Result<Option<serde_json::Value>> {
     let p = path.display().to_string();
-    let text = std::fs::read_to_string(path).map_err(|e| LbdemError::ReadScene {
-        path: p.clone(),
-        source: e,
-    })?;
+    let text = crate::scene::read_scene_text(path)?;
     if DemoScene::parse_if_demo(&text, &p)?.is_none() {
         return Ok(None);
     }
@@ -422,10 +410,7 @@ pub fn run_if_demo(
 /// `lbdem check` of a "coupled_demo" file (`None` for any other kind).
 pub fn check_if_demo(path: &Path) -> Result<Option<String>> {
     let p = path.display().to_string();
-    let text = std::fs::read_to_string(path).map_err(|e| LbdemError::ReadScene {
-        path: p.clone(),
-        source: e,
-    })?;
+    let text = crate::scene::read_scene_text(path)?;
     Ok(DemoScene::parse_if_demo(&text, &p)?.map(|s| {
         let d = &s.demo;
         format!(

@@ -209,16 +209,6 @@ pub struct PoroScene {
     pub consolidation: Option<ConsolidationSection>,
 }
 
-#[derive(Deserialize)]
-struct KindOnly {
-    scene: KindHeader,
-}
-
-#[derive(Deserialize)]
-struct KindHeader {
-    kind: String,
-}
-
 fn missing(section: &str) -> LbdemError {
     LbdemError::field(
         section,
@@ -232,14 +222,11 @@ impl PoroScene {
     /// Parse `path` as a poro scene when its `[scene] kind` is one of [`PoroKind`]; `None` otherwise.
     pub fn load_if_poro(path: &Path) -> Result<Option<Self>> {
         let p = path.display().to_string();
-        let text = std::fs::read_to_string(path).map_err(|e| LbdemError::ReadScene {
-            path: p.clone(),
-            source: e,
-        })?;
-        match toml::from_str::<KindOnly>(&text) {
-            Ok(k)
+        let text = crate::scene::read_scene_text(path)?;
+        match crate::scene::peek_kind::<String>(&text) {
+            Some(kind)
                 if matches!(
-                    k.scene.kind.as_str(),
+                    kind.as_str(),
                     "terminal_velocity"
                         | "pressure_diffusion"
                         | "fluid_compressibility"

@@ -232,12 +232,8 @@ impl Scene {
 
     /// Read and parse a scene file.
     pub fn load(path: &std::path::Path) -> Result<Self> {
-        let p = path.display().to_string();
-        let text = std::fs::read_to_string(path).map_err(|e| LbdemError::ReadScene {
-            path: p.clone(),
-            source: e,
-        })?;
-        Self::from_toml(&text, &p)
+        let text = read_scene_text(path)?;
+        Self::from_toml(&text, &path.display().to_string())
     }
 
     /// Range checks that do not need derived quantities (those are in [`crate::units`]).
@@ -401,4 +397,26 @@ impl Scene {
         }
         Ok(())
     }
+}
+
+/// Read a scene file; the error names the path.
+pub fn read_scene_text(path: &std::path::Path) -> Result<String> {
+    std::fs::read_to_string(path).map_err(|e| LbdemError::ReadScene {
+        path: path.display().to_string(),
+        source: e,
+    })
+}
+
+/// The `[scene] kind` of a scene's TOML text as `K` (a kind enum, or `String`); `None` if the header does not
+/// parse as `K` (the scene's own parser then reports the problem).
+pub fn peek_kind<K: serde::de::DeserializeOwned>(text: &str) -> Option<K> {
+    #[derive(Deserialize)]
+    struct Header<K> {
+        scene: KindField<K>,
+    }
+    #[derive(Deserialize)]
+    struct KindField<K> {
+        kind: K,
+    }
+    toml::from_str::<Header<K>>(text).ok().map(|h| h.scene.kind)
 }

@@ -226,15 +226,6 @@ pub struct FractureScene {
 /// Kind tag of fracture checkpoints.
 pub const FRACTURE_KIND: &str = "fracture";
 
-#[derive(Deserialize)]
-struct KindOnly {
-    scene: KindHeader,
-}
-#[derive(Deserialize)]
-struct KindHeader {
-    kind: SceneKind,
-}
-
 /// Derived fluid set-up: units, lattice size, densities.
 #[derive(Clone, Copy, Debug, Serialize)]
 pub struct FluidSetup {
@@ -256,12 +247,9 @@ impl FractureScene {
     /// Parse `path` as a fracture scene when its `[scene] kind` is "fracture"; `None` for any other kind.
     pub fn load_if_fracture(path: &Path) -> Result<Option<Self>> {
         let p = path.display().to_string();
-        let text = std::fs::read_to_string(path).map_err(|e| LbdemError::ReadScene {
-            path: p.clone(),
-            source: e,
-        })?;
-        match toml::from_str::<KindOnly>(&text) {
-            Ok(k) if k.scene.kind == SceneKind::Fracture => Self::from_toml(&text, &p).map(Some),
+        let text = crate::scene::read_scene_text(path)?;
+        match crate::scene::peek_kind::<SceneKind>(&text) {
+            Some(SceneKind::Fracture) => Self::from_toml(&text, &p).map(Some),
             _ => Ok(None),
         }
     }
@@ -585,10 +573,7 @@ impl FractureScene {
         packing: Option<Packing<f64>>,
         stop_after: Option<u64>,
     ) -> Result<serde_json::Value> {
-        let text = std::fs::read_to_string(path).map_err(|e| LbdemError::ReadScene {
-            path: path.display().to_string(),
-            source: e,
-        })?;
+        let text = crate::scene::read_scene_text(path)?;
         let description = self.describe()?;
         start_run_dir(out, &text, overwrite)?;
         eprintln!("lbdem: fracture scene {}", path.display());
@@ -1702,10 +1687,7 @@ pub fn compare_breaks(dirs: &[std::path::PathBuf], out: &Path) -> Result<()> {
     let mut series = Vec::new();
     for dir in dirs {
         let path = dir.join("history.csv");
-        let text = std::fs::read_to_string(&path).map_err(|e| LbdemError::ReadScene {
-            path: path.display().to_string(),
-            source: e,
-        })?;
+        let text = crate::scene::read_scene_text(&path)?;
         let mut lines = text.lines();
         let header: Vec<&str> = lines.next().unwrap_or_default().split(',').collect();
         let (Some(t), Some(b)) = (

@@ -241,30 +241,15 @@ pub struct DryScene {
 /// `lbdem check` of a dry scene file.
 pub fn check_file(path: &Path) -> Result<String> {
     let p = path.display().to_string();
-    let text = std::fs::read_to_string(path).map_err(|e| LbdemError::ReadScene {
-        path: p.clone(),
-        source: e,
-    })?;
+    let text = crate::scene::read_scene_text(path)?;
     DryScene::from_toml(&text, &p)?.check(path)
 }
 
 /// `lbdem run` of a dry scene file.
 pub fn run_file(path: &Path, out: &Path, overwrite: bool) -> Result<serde_json::Value> {
     let p = path.display().to_string();
-    let text = std::fs::read_to_string(path).map_err(|e| LbdemError::ReadScene {
-        path: p.clone(),
-        source: e,
-    })?;
+    let text = crate::scene::read_scene_text(path)?;
     DryScene::from_toml(&text, &p)?.run(path, out, overwrite)
-}
-
-#[derive(Deserialize)]
-struct KindOnly {
-    scene: KindHeader,
-}
-#[derive(Deserialize)]
-struct KindHeader {
-    kind: SceneKind,
 }
 
 fn non_negative(field: &str, v: f64, hint: &str) -> Result<()> {
@@ -449,12 +434,9 @@ impl DryScene {
     /// whose header does not parse: the caller's own parser reports those).
     pub fn load_if_dry(path: &Path) -> Result<Option<Self>> {
         let p = path.display().to_string();
-        let text = std::fs::read_to_string(path).map_err(|e| LbdemError::ReadScene {
-            path: p.clone(),
-            source: e,
-        })?;
-        match toml::from_str::<KindOnly>(&text) {
-            Ok(k) if k.scene.kind == SceneKind::Dry => Self::from_toml(&text, &p).map(Some),
+        let text = crate::scene::read_scene_text(path)?;
+        match crate::scene::peek_kind::<SceneKind>(&text) {
+            Some(SceneKind::Dry) => Self::from_toml(&text, &p).map(Some),
             _ => Ok(None),
         }
     }

@@ -370,11 +370,7 @@ impl DryScene {
         opts: &DryRunOptions,
     ) -> Result<serde_json::Value> {
         let p = path.display().to_string();
-        let text =
-            std::fs::read_to_string(path).map_err(|e| crate::error::LbdemError::ReadScene {
-                path: p.clone(),
-                source: e,
-            })?;
+        let text = crate::scene::read_scene_text(path)?;
         let critical = self.critical_time_step();
         self.check_timestep(critical)?;
         start_run_dir(out, &text, opts.overwrite)?;
