@@ -8,9 +8,13 @@
 //! * `psm`: the same with ~30 % of the area covered by a square grid of discs (Noble–Torczynski weighting),
 //!   1024², f32 and f64, 1 and 2 threads.
 //!
-//! The two-lattice update moves 2 × 9 populations per node (one read, one write each): 144 bytes per update in
-//! f64, 72 in f32, so the MLUPS ceiling is bandwidth / 144 B (f64) or / 72 B (f32), with the bandwidth being the
-//! triad figure for the same thread count.
+//! Both streaming schemes read 9 and write 9 populations per node update: 144 bytes per update in f64, 72 in
+//! f32, counted as STREAM counts (no write-allocate), so the MLUPS ceiling is bandwidth / 144 B (f64) or / 72 B
+//! (f32), with the bandwidth being the triad figure for the same thread count. The two-lattice scheme writes
+//! into a second buffer, so the hardware also reads each destination line before writing it (write-allocate):
+//! 216 B move per f64 update against the 144 counted, where the triad moves 32 B against 24. The in-place AA
+//! scheme (the default, `lbdem::lattice::Streaming`) writes the lines it has just read: 144 B move, so it can
+//! exceed 100 % of this ceiling.
 //!
 //! Each case's time per iteration is the median of criterion's samples (taken through `iter_custom`); a table
 //! with MLUPS, ceiling and ratio is printed at the end. Regenerate with
@@ -19,16 +23,17 @@
 //! 2-thread figures (triad and lattice alike) noisy, so repeat and compare runs with a low load.
 //!
 //! The workspace builds for the baseline x86-64 target (SSE2), and the bulk pass is also compiled for AVX2 and
-//! AVX-512 and picked at run time (`lbdem::exec`); results are bitwise identical at every level. Every case
-//! runs at the widest level the CPU has; the 2048² BGK cases also run at the baseline level, so the table
-//! shows what the run-time dispatch gains.
+//! AVX-512 and picked at run time (`lbdem::exec`); results are bitwise identical at every level and with either
+//! scheme. Every case runs in place (AA) at the widest level the CPU has; the 2048² BGK cases also run with the
+//! two-lattice scheme and at the baseline level, and the PSM cases with the two-lattice scheme, so the table
+//! shows what each gains.
 use std::collections::BTreeMap;
 use std::sync::Mutex;
 use std::time::{Duration, Instant};
 
 use criterion::{BenchmarkId, Criterion, Throughput};
 use lbdem::exec::SimdLevel;
-use lbdem::lattice::{FluidDisc, FluidLattice};
+use lbdem::lattice::{FluidDisc, FluidLattice, Streaming};
 use lbdem_kernels::fluid::boundary::Boundaries;
 use lbdem_kernels::fluid::collide::Weighting;
 use lbdem_kernels::fluid::step::FluidParams;
@@ -192,16 +197,22 @@ fn disc_grid(n: usize) -> Vec<FluidDisc> {
     discs
 }
 
-fn lattice_case(kind: &str, prec: &str, n: usize, threads: usize, level: SimdLevel) -> String {
-    format!("{kind}/{prec}/{n}/{threads}t/{}", level.name())
+/// How a case is executed: instruction set of the bulk pass and streaming scheme.
+type Variant = (SimdLevel, Streaming);
+
+fn lattice_case(kind: &str, prec: &str, n: usize, threads: usize, v: Variant) -> String {
+    format!("{kind}/{prec}/{n}/{threads}t/{}/{}", v.0.name(), v.1.name())
 }
 
-fn bench_lattice<T: Real>(c: &mut Criterion, kind: &str, sizes: &[usize], level: SimdLevel) {
-    let suffix = if level == SimdLevel::detect() {
-        String::new()
-    } else {
-        format!("/{}", level.name())
-    };
+fn bench_lattice<T: Real>(c: &mut Criterion, kind: &str, sizes: &[usize], variant: Variant) {
+    let (level, streaming) = variant;
+    let mut suffix = String::new();
+    if level != SimdLevel::detect() {
+        suffix += &format!("/{}", level.name());
+    }
+    if streaming != Streaming::Aa {
+        suffix += &format!("/{}", streaming.name());
+    }
     let mut group = c.benchmark_group(format!("{kind}/{}{suffix}", T::NAME));
     group
         .sample_size(SAMPLES)
@@ -214,10 +225,11 @@ fn bench_lattice<T: Real>(c: &mut Criterion, kind: &str, sizes: &[usize], level:
             let mut lattice = p.install(|| {
                 let mut l = periodic_lattice::<T>(n);
                 l.set_simd(level).expect("level available");
+                l.set_streaming(streaming);
                 if kind == "psm" {
                     l.cover_with_discs(&disc_grid(n), Weighting::NobleTorczynski);
                 }
-                // First touch of both buffers by the pool that will run the steps.
+                // First touch of the buffer(s) by the pool that will run the steps.
                 l.step();
                 l.step();
                 l
@@ -230,7 +242,7 @@ fn bench_lattice<T: Real>(c: &mut Criterion, kind: &str, sizes: &[usize], level:
                     100.0 * covered
                 );
             }
-            let case = lattice_case(kind, T::NAME, n, threads, level);
+            let case = lattice_case(kind, T::NAME, n, threads, variant);
             group.bench_function(
                 BenchmarkId::new(format!("{n}"), format!("{threads}t")),
                 |bench| {
@@ -268,22 +280,26 @@ fn print_summary() {
         }
     }
     println!();
-    println!("=== D2Q9 two-lattice update (MLUPS: median and best of {SAMPLES} samples) ===");
+    println!("=== D2Q9 update (MLUPS: median and best of {SAMPLES} samples) ===");
     println!(
-        "{:<6} {:<4} {:>6} {:>7} {:>9} {:>10} {:>10} {:>10} {:>7}",
-        "case", "prec", "size", "threads", "simd", "MLUPS", "best", "ceiling", "ratio"
+        "{:<6} {:<4} {:>6} {:>7} {:>9} {:>11} {:>10} {:>10} {:>10} {:>7}",
+        "case", "prec", "size", "threads", "simd", "streaming", "MLUPS", "best", "ceiling", "ratio"
     );
-    let mut levels = vec![SimdLevel::detect()];
-    if SimdLevel::detect() != SimdLevel::Baseline {
-        levels.push(SimdLevel::Baseline);
+    let mut variants = Vec::new();
+    for level in [SimdLevel::detect(), SimdLevel::Baseline] {
+        for streaming in Streaming::ALL {
+            if !variants.contains(&(level, streaming)) {
+                variants.push((level, streaming));
+            }
+        }
     }
     for kind in ["bgk", "psm"] {
         for prec in ["f64", "f32"] {
             for n in [256, 1024, 2048] {
                 for threads in THREADS {
-                    for &level in &levels {
+                    for &variant in &variants {
                         let Some((t, best)) =
-                            sample_times(&lattice_case(kind, prec, n, threads, level))
+                            sample_times(&lattice_case(kind, prec, n, threads, variant))
                         else {
                             continue;
                         };
@@ -301,9 +317,10 @@ fn print_summary() {
                             None => ("         -".to_string(), "      -".to_string()),
                         };
                         println!(
-                        "{kind:<6} {prec:<4} {:>6} {threads:>7} {:>9} {mlups:>10.1} {mlups_best:>10.1} {ceiling} {ratio}",
+                        "{kind:<6} {prec:<4} {:>6} {threads:>7} {:>9} {:>11} {mlups:>10.1} {mlups_best:>10.1} {ceiling} {ratio}",
                         format!("{n}²"),
-                        level.name()
+                        variant.0.name(),
+                        variant.1.name()
                     );
                     }
                 }
@@ -325,15 +342,20 @@ fn main() {
     let load_before = load_average();
     let mut c = Criterion::default().configure_from_args();
     bench_triad(&mut c);
-    let widest = SimdLevel::detect();
+    let widest = (SimdLevel::detect(), Streaming::Aa);
+    let two = (SimdLevel::detect(), Streaming::TwoLattice);
     bench_lattice::<f64>(&mut c, "bgk", &[256, 1024, 2048], widest);
     bench_lattice::<f32>(&mut c, "bgk", &[256, 1024, 2048], widest);
-    if widest != SimdLevel::Baseline {
-        bench_lattice::<f64>(&mut c, "bgk", &[2048], SimdLevel::Baseline);
-        bench_lattice::<f32>(&mut c, "bgk", &[2048], SimdLevel::Baseline);
+    bench_lattice::<f64>(&mut c, "bgk", &[2048], two);
+    bench_lattice::<f32>(&mut c, "bgk", &[2048], two);
+    if widest.0 != SimdLevel::Baseline {
+        bench_lattice::<f64>(&mut c, "bgk", &[2048], (SimdLevel::Baseline, Streaming::Aa));
+        bench_lattice::<f32>(&mut c, "bgk", &[2048], (SimdLevel::Baseline, Streaming::Aa));
     }
     bench_lattice::<f64>(&mut c, "psm", &[1024], widest);
     bench_lattice::<f32>(&mut c, "psm", &[1024], widest);
+    bench_lattice::<f64>(&mut c, "psm", &[1024], two);
+    bench_lattice::<f32>(&mut c, "psm", &[1024], two);
     c.final_summary();
     print_summary();
     println!(

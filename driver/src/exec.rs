@@ -13,7 +13,9 @@
 //! every level the CPU running the tests has.
 //!
 //! This module holds the driver's only `unsafe` code: the calls of the `#[target_feature]` functions, each
-//! made after checking that the CPU has the features.
+//! made after checking that the CPU has the features. The same holds for the bulk pass of the in-place (AA)
+//! scheme, [`aa_bulk_exec`].
+use lbdem_kernels::fluid::aa::{aa_bulk_rows, AaStep};
 use lbdem_kernels::fluid::d2q9::Q;
 use lbdem_kernels::fluid::lattice::LatticeShape;
 use lbdem_kernels::fluid::step::{bulk_band, FluidParams};
@@ -131,9 +133,54 @@ pub fn bulk_band_exec<T: Real>(
     bulk_band(shape, src, dst, y0, y1, params);
 }
 
+/// The bulk pass of one in-place (AA) step over a band of rows ([`aa_bulk_rows`]), compiled for `simd`.
+/// Falls back to the baseline level if `simd` is not available on this CPU.
+pub fn aa_bulk_exec<T: Real>(
+    simd: SimdLevel,
+    rows: &mut [[&mut [T]; Q]],
+    step: AaStep,
+    params: &FluidParams<T>,
+) {
+    #[cfg(target_arch = "x86_64")]
+    {
+        if simd == SimdLevel::Avx512 && SimdLevel::Avx512.available() {
+            // SAFETY: the CPU has AVX-512 F/VL/DQ/BW (checked just above).
+            unsafe { x86::aa_avx512(rows, step, params) };
+            return;
+        }
+        if simd == SimdLevel::Avx2 && SimdLevel::Avx2.available() {
+            // SAFETY: the CPU has AVX2 (checked just above).
+            unsafe { x86::aa_avx2(rows, step, params) };
+            return;
+        }
+    }
+    let _ = simd;
+    aa_bulk_rows(rows, step, params);
+}
+
 #[cfg(target_arch = "x86_64")]
 mod x86 {
     use super::*;
+
+    /// [`aa_bulk_rows`] compiled for AVX2.
+    #[target_feature(enable = "avx2")]
+    pub(super) fn aa_avx2<T: Real>(
+        rows: &mut [[&mut [T]; Q]],
+        step: AaStep,
+        params: &FluidParams<T>,
+    ) {
+        aa_bulk_rows(rows, step, params);
+    }
+
+    /// [`aa_bulk_rows`] compiled for AVX-512.
+    #[target_feature(enable = "avx512f,avx512vl,avx512dq,avx512bw")]
+    pub(super) fn aa_avx512<T: Real>(
+        rows: &mut [[&mut [T]; Q]],
+        step: AaStep,
+        params: &FluidParams<T>,
+    ) {
+        aa_bulk_rows(rows, step, params);
+    }
 
     /// [`bulk_band`] compiled for AVX2.
     #[target_feature(enable = "avx2")]

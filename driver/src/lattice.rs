@@ -1,24 +1,79 @@
-//! The fluid lattice owned by the driver: the two population buffers, node flags, the special-node list, and
-//! the parallel step that hands row bands to [`lbdem_kernels::fluid::step`] through rayon.
+//! The fluid lattice owned by the driver: the population buffer(s), node flags, the special-node list, and
+//! the parallel step that hands row bands to the kernels through rayon.
 //!
-//! Bands are independent (each reads only the source buffer and writes only its own rows of the destination),
-//! so the result is bitwise the same for any number of threads or bands.
+//! Two streaming schemes give bitwise the same populations ([`Streaming`]): the in-place AA pattern of
+//! [`lbdem_kernels::fluid::aa`] (one buffer, the default) and the two-lattice pull of
+//! [`lbdem_kernels::fluid::step`] (two buffers). In both, each node's update is independent of every other
+//! node's, and special and covered nodes are computed in a fixed order, so the result is bitwise the same for
+//! any number of threads or bands.
 use lbdem_kernels::coupling::{
     body_cell_range, reduce_exchange, rigid_velocity, BodyShape, CoupledBody, PreparedBody,
 };
+use lbdem_kernels::fluid::aa::{plane_row, store_post_collision, to_collided, AaStep, Layout};
 use lbdem_kernels::fluid::boundary::{Boundaries, SideCondition};
 use lbdem_kernels::fluid::collide::{PsmParams, SolidOperator, SolidShare, Weighting};
 use lbdem_kernels::fluid::d2q9::{equilibrium, Q};
 use lbdem_kernels::fluid::lattice::{LatticeShape, Side};
 use lbdem_kernels::fluid::step::{
-    classify_special_nodes, collide_covered_nodes, fix_special_nodes, gathered_moments,
-    nodes_in_rows, planes_mut, CoveredNodes, Domain, FluidParams, FLUID, SOLID,
+    classify_special_nodes, collide_covered_nodes, covered_node_value, fix_special_nodes,
+    gathered_moments_in, nodes_in_rows, planes_mut, special_node_value, CoveredNodes, Domain,
+    FluidParams, FLUID, SOLID,
 };
 use lbdem_kernels::Real;
 use rayon::prelude::*;
+use std::borrow::Cow;
 
 use crate::error::{LbdemError, Result};
-use crate::exec::{bulk_band_exec, SimdLevel};
+use crate::exec::{aa_bulk_exec, bulk_band_exec, SimdLevel};
+
+/// How populations are streamed. Both schemes give bitwise the same populations after every step; they
+/// differ in memory and speed only.
+#[derive(
+    Clone, Copy, Debug, Default, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize,
+)]
+#[serde(rename_all = "kebab-case")]
+pub enum Streaming {
+    /// In place, AA pattern: one buffer, 2/3 of the memory traffic of the two-lattice scheme.
+    #[default]
+    Aa,
+    /// Two-lattice pull: read one buffer, write the other.
+    TwoLattice,
+}
+
+impl Streaming {
+    /// Both schemes.
+    pub const ALL: [Streaming; 2] = [Streaming::Aa, Streaming::TwoLattice];
+
+    /// Name for reports and the command line: "aa", "two-lattice".
+    pub fn name(self) -> &'static str {
+        match self {
+            Streaming::Aa => "aa",
+            Streaming::TwoLattice => "two-lattice",
+        }
+    }
+
+    /// The scheme named `name`, or `None`.
+    pub fn from_name(name: &str) -> Option<Self> {
+        Self::ALL.into_iter().find(|s| s.name() == name)
+    }
+}
+
+/// Scheme new lattices start with: 0 = AA, 1 = two-lattice.
+static DEFAULT_STREAMING: std::sync::atomic::AtomicU8 = std::sync::atomic::AtomicU8::new(0);
+
+/// Choose the streaming scheme every lattice created from now on starts with (the `--streaming` option).
+pub fn set_default_streaming(s: Streaming) {
+    DEFAULT_STREAMING.store(s as u8, std::sync::atomic::Ordering::Relaxed);
+}
+
+/// The scheme new lattices start with ([`Streaming::Aa`] unless [`set_default_streaming`] chose another).
+pub fn default_streaming() -> Streaming {
+    let v = DEFAULT_STREAMING.load(std::sync::atomic::Ordering::Relaxed);
+    Streaming::ALL
+        .into_iter()
+        .find(|s| *s as u8 == v)
+        .unwrap_or_default()
+}
 
 mod persist;
 
@@ -29,7 +84,8 @@ pub struct FluidLattice<T: Real> {
     params: FluidParams<T>,
     flags: Vec<u8>,
     special: Vec<u32>,
-    /// Both population buffers in one allocation: `[first | gap | second]`, see [`buffer_gap`].
+    /// The population buffers in one allocation: `[first | gap | second]` (see [`buffer_gap`]) for the
+    /// two-lattice scheme, `[first]` only for the in-place scheme.
     buffers: Vec<T>,
     /// Start of the second buffer in `buffers`.
     second: usize,
@@ -41,6 +97,12 @@ pub struct FluidLattice<T: Real> {
     cover_scratch: CoverScratch,
     solid_operator: SolidOperator,
     simd: SimdLevel,
+    streaming: Streaming,
+    /// Layout of the current buffer (always [`Layout::Collided`] with the two-lattice scheme).
+    layout: Layout,
+    /// In-place scheme: new values of the special and covered nodes, computed before the bulk pass.
+    aa_special: Vec<[T; Q]>,
+    aa_covered: Vec<Option<[T; Q]>>,
 }
 
 /// Buffers kept between calls of [`FluidLattice::cover_with_bodies`]: the cells of each body, and per-node
@@ -170,13 +232,14 @@ impl<T: Real> FluidLattice<T> {
             ));
         }
         let len = shape.buffer_len();
+        let streaming = default_streaming();
         let mut lattice = Self {
             shape,
             bc,
             params,
             flags: vec![FLUID; shape.nodes()],
             special: Vec::new(),
-            buffers: vec![T::zero(); 2 * len + buffer_gap::<T>(len)],
+            buffers: vec![T::zero(); buffers_len::<T>(len, streaming)],
             second: len + buffer_gap::<T>(len),
             first_is_current: true,
             band_rows: 8,
@@ -185,6 +248,10 @@ impl<T: Real> FluidLattice<T> {
             cover_scratch: CoverScratch::default(),
             solid_operator: SolidOperator::default(),
             simd: crate::exec::default_level(),
+            streaming,
+            layout: Layout::Collided,
+            aa_special: Vec::new(),
+            aa_covered: Vec::new(),
         };
         lattice.reclassify();
         lattice.fill_equilibrium(|_, _| (T::one(), [T::zero(); 2]));
@@ -236,6 +303,39 @@ impl<T: Real> FluidLattice<T> {
         Ok(())
     }
 
+    /// The streaming scheme.
+    pub fn streaming(&self) -> Streaming {
+        self.streaming
+    }
+
+    /// Choose the streaming scheme. Results are bitwise the same with either; memory and speed change.
+    pub fn set_streaming(&mut self, streaming: Streaming) {
+        if streaming == self.streaming {
+            return;
+        }
+        self.normalize();
+        let len = self.shape.buffer_len();
+        if !self.first_is_current {
+            self.buffers.copy_within(self.second..self.second + len, 0);
+            self.first_is_current = true;
+        }
+        self.buffers
+            .resize(buffers_len::<T>(len, streaming), T::zero());
+        self.buffers.shrink_to_fit();
+        self.streaming = streaming;
+    }
+
+    /// Bring the current buffer into the two-lattice layout (a no-op unless the in-place scheme left it in
+    /// its streamed layout after an odd step).
+    fn normalize(&mut self) {
+        if self.layout == Layout::Collided {
+            return;
+        }
+        let collided = self.populations().into_owned();
+        self.layout = Layout::Collided;
+        self.current_mut().copy_from_slice(&collided);
+    }
+
     /// Rows per parallel band (default 8; results do not depend on it, only speed does).
     pub fn set_band_rows(&mut self, rows: usize) {
         self.band_rows = rows.max(1);
@@ -243,6 +343,8 @@ impl<T: Real> FluidLattice<T> {
 
     /// Mark nodes as solid obstacles (half-way bounce-back) according to `solid(x, y)`.
     pub fn set_solid(&mut self, solid: impl Fn(usize, usize) -> bool) {
+        // Where the in-place scheme keeps a population depends on the flags: store it plainly first.
+        self.normalize();
         for y in 0..self.shape.ny {
             for x in 0..self.shape.nx {
                 let n = self.shape.index(x, y);
@@ -261,6 +363,8 @@ impl<T: Real> FluidLattice<T> {
 
     /// Set every node to the equilibrium of `state(x, y) = (ρ, u)` (stored as post-collision populations).
     pub fn fill_equilibrium(&mut self, state: impl Fn(usize, usize) -> (T, [T; 2])) {
+        // Every node's nine slots are rewritten below, in the two-lattice layout.
+        self.layout = Layout::Collided;
         let stride = self.shape.stride;
         for y in 0..self.shape.ny {
             for x in 0..self.shape.nx {
@@ -274,28 +378,53 @@ impl<T: Real> FluidLattice<T> {
         }
     }
 
-    /// The current (post-collision) population buffer.
-    pub fn populations(&self) -> &[T] {
-        let len = self.shape.buffer_len();
-        if self.first_is_current {
-            &self.buffers[..len]
-        } else {
-            &self.buffers[self.second..self.second + len]
+    /// The current post-collision populations in the two-lattice layout (direction q of node n at
+    /// `q * stride + n`, padding included). Borrowed, except after an odd step of the in-place scheme, when
+    /// they are gathered from where that scheme keeps them.
+    pub fn populations(&self) -> Cow<'_, [T]> {
+        let current = self.current();
+        match self.layout {
+            Layout::Collided => Cow::Borrowed(current),
+            Layout::Streamed => {
+                let mut out = vec![T::zero(); current.len()];
+                let periodic = self.bc.periodic_axes();
+                to_collided(
+                    &self.shape,
+                    periodic,
+                    &self.flags,
+                    self.layout,
+                    current,
+                    &mut out,
+                );
+                Cow::Owned(out)
+            }
         }
     }
 
-    /// Mutable access to the current population buffer (for initial conditions and tests).
+    /// Mutable access to the current population buffer in the two-lattice layout (for initial conditions and
+    /// tests).
     pub fn populations_mut(&mut self) -> &mut [T] {
+        self.normalize();
         self.current_mut()
     }
 
-    fn current_mut(&mut self) -> &mut [T] {
+    fn current(&self) -> &[T] {
+        &self.buffers[self.current_range()]
+    }
+
+    /// Where the current buffer lies in `buffers`.
+    fn current_range(&self) -> std::ops::Range<usize> {
         let len = self.shape.buffer_len();
         if self.first_is_current {
-            &mut self.buffers[..len]
+            0..len
         } else {
-            &mut self.buffers[self.second..self.second + len]
+            self.second..self.second + len
         }
+    }
+
+    fn current_mut(&mut self) -> &mut [T] {
+        let range = self.current_range();
+        &mut self.buffers[range]
     }
 
     /// Cover the lattice with discs (exact cell fractions, several discs per cell add up, capped at 1 by the
@@ -523,6 +652,130 @@ impl<T: Real> FluidLattice<T> {
 
     /// Advance one lattice step, in parallel over row bands on the current rayon pool.
     pub fn step(&mut self) {
+        match self.streaming {
+            Streaming::Aa => self.step_in_place(),
+            Streaming::TwoLattice => self.step_two_lattice(),
+        }
+        self.steps += 1;
+    }
+
+    /// One step of the in-place (AA) scheme, in three phases:
+    /// 1. in parallel, read only: the new values of the special nodes and the covered nodes (with their momentum
+    ///    exchange), gathered from the buffer as it is;
+    /// 2. in parallel over bands of rows: the branch-free bulk pass over every node, in place;
+    /// 3. in order: the values of phase 1 stored at their places, overwriting what phase 2 wrote there.
+    fn step_in_place(&mut self) {
+        const CHUNK: usize = 1024;
+        let shape = self.shape;
+        let periodic = self.bc.periodic_axes();
+        let (params, simd, band_rows) = (self.params, self.simd, self.band_rows);
+        let layout = self.layout;
+        let after = layout.next();
+        let kind = AaStep::from(layout);
+        let mut special_vals = std::mem::take(&mut self.aa_special);
+        let mut covered_vals = std::mem::take(&mut self.aa_covered);
+        let range = self.current_range();
+        // Phase 1.
+        {
+            let domain = Domain {
+                shape,
+                bc: self.bc,
+                flags: &self.flags,
+            };
+            let buf = &self.buffers[range.clone()];
+            special_vals.resize(self.special.len(), [T::zero(); Q]);
+            self.special
+                .par_chunks(CHUNK)
+                .zip(special_vals.par_chunks_mut(CHUNK))
+                .for_each(|(nodes, vals)| {
+                    for (&n, v) in nodes.iter().zip(vals.iter_mut()) {
+                        *v = special_node_value(&domain, buf, layout, &params, n as usize);
+                    }
+                });
+            if let Some(cov) = &mut self.coverage {
+                let psm = PsmParams {
+                    tau: params.tau,
+                    weighting: cov.weighting,
+                    force: params.force,
+                    solid: self.solid_operator,
+                };
+                covered_vals.resize(cov.nodes.len(), None);
+                // Chunks of covered nodes with their share ranges and exchange entries.
+                let mut work = Vec::with_capacity(cov.nodes.len().div_ceil(CHUNK));
+                let mut exchange_rest: &mut [[T; 2]] = &mut cov.exchange;
+                let mut vals_rest: &mut [Option<[T; Q]>] = &mut covered_vals;
+                for lo in (0..cov.nodes.len()).step_by(CHUNK) {
+                    let hi = (lo + CHUNK).min(cov.nodes.len());
+                    let len = (cov.offsets[hi] - cov.offsets[lo]) as usize;
+                    let (ex, rest) = std::mem::take(&mut exchange_rest).split_at_mut(len);
+                    exchange_rest = rest;
+                    let (vals, rest) = std::mem::take(&mut vals_rest).split_at_mut(hi - lo);
+                    vals_rest = rest;
+                    work.push((lo, hi, ex, vals));
+                }
+                let (nodes, offsets, shares) = (&cov.nodes, &cov.offsets, &cov.shares);
+                work.into_par_iter().for_each(|(lo, hi, ex, vals)| {
+                    let first = offsets[lo] as usize;
+                    for (k, v) in (lo..hi).zip(vals.iter_mut()) {
+                        let (a, b) = (offsets[k] as usize, offsets[k + 1] as usize);
+                        *v = covered_node_value(
+                            &domain,
+                            buf,
+                            layout,
+                            &psm,
+                            nodes[k] as usize,
+                            &shares[a..b],
+                            &mut ex[a - first..b - first],
+                        );
+                    }
+                });
+            } else {
+                covered_vals.clear();
+            }
+        }
+        // Phase 2: row y of the pass needs row `plane_row(kind, p, y)` of each plane p; every plane row is
+        // handed out exactly once.
+        {
+            let nx = shape.nx;
+            let buf = &mut self.buffers[range.clone()];
+            let mut plane_rows: Vec<Vec<Option<&mut [T]>>> = planes_mut(&shape, buf)
+                .into_iter()
+                .map(|plane| plane.chunks_mut(nx).map(Some).collect())
+                .collect();
+            let mut rows: Vec<[&mut [T]; Q]> = (0..shape.ny)
+                .map(|y| {
+                    std::array::from_fn(|p| {
+                        plane_rows[p][plane_row(kind, p, y, shape.ny)]
+                            .take()
+                            .unwrap_or_default()
+                    })
+                })
+                .collect();
+            rows.par_chunks_mut(band_rows)
+                .for_each(|band| aa_bulk_exec(simd, band, kind, &params));
+        }
+        // Phase 3.
+        {
+            let (buf, flags) = (&mut self.buffers[range], &self.flags);
+            for (&n, f) in self.special.iter().zip(&special_vals) {
+                store_post_collision(&shape, periodic, flags, after, buf, n as usize, f);
+            }
+            if let Some(cov) = &self.coverage {
+                for (&n, f) in cov.nodes.iter().zip(&covered_vals) {
+                    if let Some(f) = f {
+                        store_post_collision(&shape, periodic, flags, after, buf, n as usize, f);
+                    }
+                }
+            }
+        }
+        self.layout = after;
+        self.aa_special = special_vals;
+        self.aa_covered = covered_vals;
+    }
+
+    /// One step of the two-lattice scheme: bulk pass, special nodes and covered nodes per band of rows, from the
+    /// current buffer into the other.
+    fn step_two_lattice(&mut self) {
         let shape = self.shape;
         let domain = Domain {
             shape,
@@ -610,7 +863,6 @@ impl<T: Real> FluidLattice<T> {
                 }
             });
         self.first_is_current = !self.first_is_current;
-        self.steps += 1;
     }
 
     /// Density and velocity of every node (row-major), as the next collision sees them.
@@ -618,9 +870,10 @@ impl<T: Real> FluidLattice<T> {
         let n = self.shape.nodes();
         let mut rho = vec![T::zero(); n];
         let mut u = vec![[T::zero(); 2]; n];
-        gathered_moments(
+        gathered_moments_in(
             &self.shape,
-            self.populations(),
+            self.current(),
+            self.layout,
             &self.bc,
             &self.flags,
             self.params.force,
@@ -687,6 +940,14 @@ impl<T: Real> FluidLattice<T> {
 /// [`LatticeShape`]); with both buffers at the same offset, the store to plane q of the destination would hit
 /// the same 4 KiB offset as the load from plane q of the source a few elements before it ("4K aliasing": the
 /// load waits for the store). 160 bytes is as far as possible from every multiple of 320 bytes mod 4 KiB.
+/// Length of the buffer allocation for buffers of `len` elements and scheme `streaming`.
+fn buffers_len<T>(len: usize, streaming: Streaming) -> usize {
+    match streaming {
+        Streaming::Aa => len,
+        Streaming::TwoLattice => 2 * len + buffer_gap::<T>(len),
+    }
+}
+
 fn buffer_gap<T>(len: usize) -> usize {
     let size = std::mem::size_of::<T>().max(1);
     let end = (len * size) % 4096;
@@ -866,7 +1127,7 @@ mod tests {
             let same = incremental
                 .populations()
                 .iter()
-                .zip(scratch.populations())
+                .zip(scratch.populations().iter())
                 .all(|(a, b)| a.to_f64_exact().to_bits() == b.to_f64_exact().to_bits());
             assert!(same, "step {step}: populations differ");
             let centers: Vec<[f64; 2]> = bodies.iter().map(|b| b.center).collect();

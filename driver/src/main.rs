@@ -24,13 +24,8 @@ enum Command {
         /// Replace a previous run in the output directory.
         #[arg(long)]
         overwrite: bool,
-        /// Worker threads (default: all cores). Results are bitwise identical for any count.
-        #[arg(long)]
-        threads: Option<usize>,
-        /// Instruction set of the fluid's bulk pass (default: the widest this CPU has). Results are bitwise
-        /// identical at every level; only speed changes.
-        #[arg(long, value_parser = ["baseline", "avx2", "avx512"])]
-        simd: Option<String>,
+        #[command(flatten)]
+        exec: ExecArgs,
         /// No progress bar.
         #[arg(long)]
         quiet: bool,
@@ -40,13 +35,8 @@ enum Command {
     Resume {
         /// Output directory of the interrupted run.
         dir: PathBuf,
-        /// Worker threads (default: all cores). Results are bitwise identical for any count.
-        #[arg(long)]
-        threads: Option<usize>,
-        /// Instruction set of the fluid's bulk pass (default: the widest this CPU has). Results are bitwise
-        /// identical at every level; only speed changes.
-        #[arg(long, value_parser = ["baseline", "avx2", "avx512"])]
-        simd: Option<String>,
+        #[command(flatten)]
+        exec: ExecArgs,
         /// No progress bar.
         #[arg(long)]
         quiet: bool,
@@ -82,17 +72,39 @@ enum StudyCommand {
         /// Run only the coarse end of every resolution ladder (a few seconds).
         #[arg(long)]
         quick: bool,
-        /// Worker threads (default: all cores).
-        #[arg(long)]
-        threads: Option<usize>,
-        /// Instruction set of the fluid's bulk pass (default: the widest this CPU has). Results are bitwise
-        /// identical at every level; only speed changes.
-        #[arg(long, value_parser = ["baseline", "avx2", "avx512"])]
-        simd: Option<String>,
+        #[command(flatten)]
+        exec: ExecArgs,
     },
 }
 
-fn configure(threads: Option<usize>, simd: Option<String>) -> bool {
+/// How the work is executed: none of these options changes a single bit of the results, only speed and memory.
+#[derive(clap::Args)]
+struct ExecArgs {
+    /// Worker threads (default: all cores). Results are bitwise identical for any count.
+    #[arg(long)]
+    threads: Option<usize>,
+    /// Instruction set of the fluid's bulk pass (default: the widest this CPU has). Results are bitwise
+    /// identical at every level; only speed changes.
+    #[arg(long, value_parser = ["baseline", "avx2", "avx512"])]
+    simd: Option<String>,
+    /// Streaming scheme of the fluid (default: aa, in place, one population buffer). two-lattice uses two
+    /// buffers and moves 1.5 times the bytes per step. Results are bitwise identical with either.
+    #[arg(long, value_parser = ["aa", "two-lattice"])]
+    streaming: Option<String>,
+}
+
+fn configure(exec: ExecArgs) -> bool {
+    let ExecArgs {
+        threads,
+        simd,
+        streaming,
+    } = exec;
+    if let Some(s) = streaming
+        .as_deref()
+        .and_then(lbdem::lattice::Streaming::from_name)
+    {
+        lbdem::lattice::set_default_streaming(s);
+    }
     if let Some(name) = simd {
         let level = lbdem::exec::SimdLevel::from_name(&name);
         if let Err(e) = level
@@ -122,23 +134,17 @@ fn main() -> ExitCode {
             scene,
             out,
             overwrite,
-            threads,
-            simd,
+            exec,
             quiet,
         } => {
-            if !configure(threads, simd) {
+            if !configure(exec) {
                 return ExitCode::FAILURE;
             }
             lbdem::longrun::install_interrupt_handler();
             lbdem::run::run(&scene, &out, &lbdem::run::RunOptions { overwrite, quiet }).map(|_| ())
         }
-        Command::Resume {
-            dir,
-            threads,
-            simd,
-            quiet,
-        } => {
-            if !configure(threads, simd) {
+        Command::Resume { dir, exec, quiet } => {
+            if !configure(exec) {
                 return ExitCode::FAILURE;
             }
             lbdem::longrun::install_interrupt_handler();
@@ -147,15 +153,9 @@ fn main() -> ExitCode {
         Command::Check { scene } => lbdem::run::check(&scene).map(|s| print!("{s}")),
         Command::CompareBreaks { dirs, out } => lbdem::fracture::compare_breaks(&dirs, &out),
         Command::Study {
-            study:
-                StudyCommand::SpeedVsError {
-                    out,
-                    quick,
-                    threads,
-                    simd,
-                },
+            study: StudyCommand::SpeedVsError { out, quick, exec },
         } => {
-            if !configure(threads, simd) {
+            if !configure(exec) {
                 return ExitCode::FAILURE;
             }
             lbdem::study::speed_vs_error(&out, quick, true).map(|md| print!("{md}"))

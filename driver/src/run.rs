@@ -130,6 +130,8 @@ pub fn run(scene_path: &Path, out: &Path, opts: &RunOptions) -> Result<serde_jso
                 "wall_seconds": outcome.wall_seconds,
                 "mlups": outcome.mlups,
                 "threads": rayon::current_num_threads(),
+                "simd": crate::exec::default_level().name(),
+                "streaming": crate::lattice::default_streaming().name(),
                 "error_vs_analytical": {
                     "l2_relative": outcome.l2_error,
                     "flux_relative": outcome.flux_error,

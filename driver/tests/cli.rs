@@ -199,3 +199,42 @@ fn every_simd_level_the_cpu_has_writes_the_same_profile_and_unknown_levels_are_r
     assert!(!o.status.success());
     assert!(String::from_utf8_lossy(&o.stderr).contains("sse9"));
 }
+
+#[test]
+fn both_streaming_schemes_write_the_same_profile_and_say_which_ran() {
+    let dir = scratch("streaming");
+    let scene = dir.join("scene.toml");
+    std::fs::write(&scene, GOOD).unwrap();
+    let mut profiles = Vec::new();
+    for scheme in ["aa", "two-lattice"] {
+        let out = dir.join(scheme);
+        let o = lbdem()
+            .args([
+                "run",
+                scene.to_str().unwrap(),
+                "--out",
+                out.to_str().unwrap(),
+            ])
+            .args(["--quiet", "--streaming", scheme])
+            .output()
+            .unwrap();
+        assert!(
+            o.status.success(),
+            "--streaming {scheme} failed: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        profiles.push(std::fs::read(out.join("profile.csv")).unwrap());
+        let summary: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(out.join("summary.json")).unwrap()).unwrap();
+        assert_eq!(summary["streaming"], scheme);
+    }
+    assert_eq!(profiles[0], profiles[1], "profiles differ between schemes");
+    let o = lbdem()
+        .args(["run", scene.to_str().unwrap(), "--out"])
+        .arg(dir.join("bad"))
+        .args(["--streaming", "esoteric"])
+        .output()
+        .unwrap();
+    assert!(!o.status.success());
+    assert!(String::from_utf8_lossy(&o.stderr).contains("esoteric"));
+}

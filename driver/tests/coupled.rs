@@ -162,7 +162,7 @@ fn incremental_remapping_leaves_the_coupled_step_unchanged<T: lbdem_kernels::Rea
             .fluid
             .populations()
             .iter()
-            .zip(scratch.fluid.populations())
+            .zip(scratch.fluid.populations().iter())
             .all(|(a, b)| a.to_f64_exact().to_bits() == b.to_f64_exact().to_bits());
         assert!(same_fluid, "step {step}: populations differ");
     }

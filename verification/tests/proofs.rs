@@ -73,6 +73,15 @@ fn bulk_rows_band_for_all_lattices_and_bands() {
 }
 
 #[test]
+fn aa_bulk_rows_for_all_lattices_and_band_splits() {
+    let runs = for_all(|c| fluid::aa_bulk_rows_band(c, MAX));
+    assert_eq!(
+        runs,
+        MAX as u64 * (1..=MAX as u64).map(|ny| ny + 1).sum::<u64>()
+    );
+}
+
+#[test]
 fn nodes_in_rows_split_for_all_lattices_and_band_pairs() {
     let runs = for_all(|c| fluid::nodes_in_rows_split(c, MAX));
     // step ∈ 1..=3 with `step` choices of `first` (6 in all); y0 ≤ ym ≤ y1 in 0..=ny: C(ny + 3, 3).
@@ -101,7 +110,7 @@ fn boundary_validation_for_all_interesting_values() {
 /// Kani proofs of the same bodies (not run here: Kani cannot be installed on these machines). The layout and
 /// neighbour bodies are loop-free and proved for the same bound (`shape_new_any_size` for every `usize`);
 /// `nodes_in_rows_split` loops over at most `LOOPING_MAX`² nodes and is proved for that smaller bound.
-/// `bulk_rows_band` and `fix_passes_in_bounds` have no Kani wrapper: they fill page-padded population
+/// `bulk_rows_band`, `aa_bulk_rows_band` and `fix_passes_in_bounds` have no Kani wrapper: they fill page-padded population
 /// buffers (≥ 9 × 552 elements even for one node), far beyond practical loop unwinding, so their bounded
 /// proof is the exhaustive `for_all` run above.
 #[cfg(kani)]

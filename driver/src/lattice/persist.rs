@@ -19,7 +19,7 @@ impl<T: Real> Persist for FluidLattice<T> {
         e.put(&self.bc);
         e.put(&self.params);
         e.bytes(&self.flags);
-        e.reals(self.populations());
+        e.reals(&self.populations());
         e.u64(self.steps);
         e.put(&self.solid_operator);
         match &self.coverage {

@@ -6,9 +6,11 @@
 //! * [`lattice`]: the structure-of-arrays layout (padded planes) and neighbour index arithmetic.
 //! * [`boundary`]: boundary specifications per side, half-way bounce-back, Zou–He (1997) closures and corners.
 //! * [`step`]: the fused pull "stream + collide" update over row bands, with fix-up passes for boundary and
-//!   partially-saturated nodes.
+//!   partially-saturated nodes (two-lattice scheme).
+//! * [`aa`]: the in-place AA-pattern update (one buffer), bitwise the same results as [`step`].
 //!
 //! Everything is in lattice units: Δx = Δt = 1, c_s² = 1/3, p = ρ/3, ν = (τ − ½)/3.
+pub mod aa;
 pub mod boundary;
 pub mod collide;
 pub mod d2q9;

@@ -19,6 +19,7 @@
 //!
 //! Each pass reads only `src` and writes only the band of `dst`, so bands are independent: splitting the
 //! lattice into bands for threads gives bitwise the same result for any number of threads.
+use super::aa::{load_post_collision, Layout};
 use super::boundary::{zou_he, zou_he_corner, Boundaries, SideCondition};
 use super::collide::{bgk_collide, bgk_collide_forced, psm_collide, PsmParams, SolidShare};
 use super::d2q9::{density, equilibrium, OPPOSITE, Q, VELOCITIES};
@@ -67,11 +68,35 @@ pub fn load<T: Real>(shape: &LatticeShape, buf: &[T], index: usize) -> [T; Q] {
     core::array::from_fn(|q| buf[q * shape.stride + index])
 }
 
-/// Density and velocity (with the Guo half-force shift) of every node, from a post-collision buffer: the
-/// moments of the populations after streaming, which is what the next collision sees.
+/// Density and velocity (with the Guo half-force shift) of every node, from a post-collision buffer in the
+/// two-lattice layout: the moments of the populations after streaming, which is what the next collision sees.
 pub fn gathered_moments<T: Real>(
     shape: &LatticeShape,
     src: &[T],
+    bc: &Boundaries<T>,
+    flags: &[u8],
+    force: [T; 2],
+    rho_out: &mut [T],
+    u_out: &mut [[T; 2]],
+) {
+    gathered_moments_in(
+        shape,
+        src,
+        Layout::Collided,
+        bc,
+        flags,
+        force,
+        rho_out,
+        u_out,
+    );
+}
+
+/// [`gathered_moments`] from a buffer in either layout of the in-place scheme (see [`super::aa`]).
+#[allow(clippy::too_many_arguments)]
+pub fn gathered_moments_in<T: Real>(
+    shape: &LatticeShape,
+    src: &[T],
+    layout: Layout,
     bc: &Boundaries<T>,
     flags: &[u8],
     force: [T; 2],
@@ -86,10 +111,40 @@ pub fn gathered_moments<T: Real>(
                 u_out[n] = [T::zero(); 2];
                 continue;
             }
-            let f = gather_node(shape, src, bc, flags, x, y);
+            let f = gather_node_in(shape, src, layout, bc, flags, x, y);
             let (rho, u) = super::collide::macroscopic(&f, force);
             rho_out[n] = rho;
             u_out[n] = u;
+        }
+    }
+}
+
+/// [`gather_node`] from a buffer in either layout of the in-place scheme. In [`Layout::Streamed`] the
+/// streamed populations (bounce-back included) already sit in the node's own reversed slots, so only the
+/// Zou–He closures remain to be applied.
+#[inline]
+pub fn gather_node_in<T: Real>(
+    shape: &LatticeShape,
+    src: &[T],
+    layout: Layout,
+    bc: &Boundaries<T>,
+    flags: &[u8],
+    x: usize,
+    y: usize,
+) -> [T; Q] {
+    match layout {
+        Layout::Collided => gather_node(shape, src, bc, flags, x, y),
+        Layout::Streamed => {
+            let here = shape.index(x, y);
+            let mut f: [T; Q] = core::array::from_fn(|q| src[shape.offset(OPPOSITE[q], here)]);
+            if !(x > 0 && y > 0 && x + 1 < shape.nx && y + 1 < shape.ny) {
+                let periodic = bc.periodic_axes();
+                let density_at = |j: usize| {
+                    density(&load_post_collision(shape, periodic, flags, layout, src, j))
+                };
+                close_edges(shape, bc, flags, x, y, &mut f, density_at);
+            }
+            f
         }
     }
 }
@@ -140,20 +195,23 @@ pub fn gather_node<T: Real>(
             }
         }
     }
-    close_edges(shape, src, bc, flags, x, y, &mut f);
+    close_edges(shape, bc, flags, x, y, &mut f, |j| {
+        density(&load(shape, src, j))
+    });
     f
 }
 
-/// Apply Zou–He closures to the gathered populations of an edge node.
+/// Apply Zou–He closures to the gathered populations of an edge node. `density_at(j)` is the density (sum of
+/// the post-collision populations) of fluid node j, needed by corners between two velocity sides.
 #[inline]
 fn close_edges<T: Real>(
     shape: &LatticeShape,
-    src: &[T],
     bc: &Boundaries<T>,
     flags: &[u8],
     x: usize,
     y: usize,
     f: &mut [T; Q],
+    density_at: impl Fn(usize) -> T,
 ) {
     let xs = if x == 0 && bc.west.is_zou_he() {
         Some(Side::West)
@@ -198,7 +256,7 @@ fn close_edges<T: Real>(
                     if flags[j] == SOLID {
                         T::one()
                     } else {
-                        density(&load(shape, src, j))
+                        density_at(j)
                     }
                 }
             };
@@ -380,6 +438,32 @@ impl<T: Real> FluidParams<T> {
     }
 }
 
+/// The new post-collision populations of special node `n` (see [`classify_special_nodes`]) from `src` in
+/// `layout`: the general gather and BGK collision, or the rest equilibrium (ρ = 1, u = 0) for a solid obstacle
+/// node.
+#[inline]
+pub fn special_node_value<T: Real>(
+    domain: &Domain<'_, T>,
+    src: &[T],
+    layout: Layout,
+    params: &FluidParams<T>,
+    n: usize,
+) -> [T; Q] {
+    let (shape, bc, flags) = (&domain.shape, &domain.bc, domain.flags);
+    if flags[n] == SOLID {
+        return equilibrium(T::one(), [T::zero(); 2]);
+    }
+    let (x, y) = shape.coords(n);
+    let mut f = gather_node_in(shape, src, layout, bc, flags, x, y);
+    let omega = T::one() / params.tau;
+    if params.forced() {
+        bgk_collide_forced(&mut f, omega, params.force);
+    } else {
+        bgk_collide(&mut f, omega);
+    }
+    f
+}
+
 /// Redo the special nodes listed in `special` (sorted, all within rows y0..y1) with the general gather and
 /// BGK collision; solid obstacle nodes are set to the rest equilibrium (ρ = 1, u = 0).
 pub fn fix_special_nodes<T: Real>(
@@ -390,28 +474,12 @@ pub fn fix_special_nodes<T: Real>(
     params: &FluidParams<T>,
     special: &[u32],
 ) {
-    let (shape, bc, flags) = (&domain.shape, &domain.bc, domain.flags);
-    let omega = T::one() / params.tau;
-    let base = y0 * shape.nx;
-    let rest = equilibrium(T::one(), [T::zero(); 2]);
+    let base = y0 * domain.shape.nx;
     for &node in special {
         let n = node as usize;
-        let local = n - base;
-        if flags[n] == SOLID {
-            for q in 0..Q {
-                dst[q][local] = rest[q];
-            }
-            continue;
-        }
-        let (x, y) = shape.coords(n);
-        let mut f = gather_node(shape, src, bc, flags, x, y);
-        if params.forced() {
-            bgk_collide_forced(&mut f, omega, params.force);
-        } else {
-            bgk_collide(&mut f, omega);
-        }
+        let f = special_node_value(domain, src, Layout::Collided, params, n);
         for q in 0..Q {
-            dst[q][local] = f[q];
+            dst[q][n - base] = f[q];
         }
     }
 }
@@ -428,6 +496,33 @@ pub struct CoveredNodes<'a, T> {
     pub shares: &'a [SolidShare<T>],
 }
 
+/// The new post-collision populations of covered node `n` from `src` in `layout`: the general gather and the
+/// partially-saturated collision with `shares`, the momentum handed to each share written to `exchange`. A
+/// covered solid obstacle node is left alone (`None`, zero exchange).
+#[inline]
+#[allow(clippy::too_many_arguments)]
+pub fn covered_node_value<T: Real>(
+    domain: &Domain<'_, T>,
+    src: &[T],
+    layout: Layout,
+    params: &PsmParams<T>,
+    n: usize,
+    shares: &[SolidShare<T>],
+    exchange: &mut [[T; 2]],
+) -> Option<[T; Q]> {
+    let (shape, bc, flags) = (&domain.shape, &domain.bc, domain.flags);
+    if flags[n] == SOLID {
+        for e in exchange.iter_mut() {
+            *e = [T::zero(); 2];
+        }
+        return None;
+    }
+    let (x, y) = shape.coords(n);
+    let mut f = gather_node_in(shape, src, layout, bc, flags, x, y);
+    psm_collide(&mut f, params, shares, exchange);
+    Some(f)
+}
+
 /// Redo the covered nodes of a band with the partially-saturated collision. `exchange` receives the momentum
 /// handed to each share (force on the solid, lattice units); it covers the shares from
 /// `covered.offsets[0]` on. Covered nodes that are solid obstacle nodes are skipped.
@@ -440,25 +535,17 @@ pub fn collide_covered_nodes<T: Real>(
     covered: CoveredNodes<'_, T>,
     exchange: &mut [[T; 2]],
 ) {
-    let (shape, bc, flags) = (&domain.shape, &domain.bc, domain.flags);
-    let base = y0 * shape.nx;
+    let base = y0 * domain.shape.nx;
     let first = covered.offsets.first().copied().unwrap_or(0) as usize;
     for (k, &node) in covered.nodes.iter().enumerate() {
         let n = node as usize;
         let (a, b) = (covered.offsets[k] as usize, covered.offsets[k + 1] as usize);
         let ex = &mut exchange[a - first..b - first];
-        if flags[n] == SOLID {
-            for e in ex.iter_mut() {
-                *e = [T::zero(); 2];
+        let shares = &covered.shares[a..b];
+        if let Some(f) = covered_node_value(domain, src, Layout::Collided, params, n, shares, ex) {
+            for q in 0..Q {
+                dst[q][n - base] = f[q];
             }
-            continue;
-        }
-        let (x, y) = shape.coords(n);
-        let mut f = gather_node(shape, src, bc, flags, x, y);
-        psm_collide(&mut f, params, &covered.shares[a..b], ex);
-        let local = n - base;
-        for q in 0..Q {
-            dst[q][local] = f[q];
         }
     }
 }

@@ -1,5 +1,6 @@
 //! Fluid index-arithmetic harness bodies: the lattice layout ([`LatticeShape`]), neighbour arithmetic, the
-//! branch-free bulk pass ([`bulk_rows`]) and band splitting ([`nodes_in_rows`], [`band_mut`]).
+//! branch-free bulk passes ([`bulk_rows`], and [`scatter_row`] / [`local_row`] of the in-place scheme) and band
+//! splitting ([`nodes_in_rows`], [`band_mut`]).
 //!
 //! Each body takes its inputs from a [`Chooser`] and a size bound `max` (nx, ny ∈ 1..=max) and asserts that
 //! every index the kernel computes is in bounds and has the expected value. Overflow freedom comes from
@@ -7,6 +8,9 @@
 //! and fails the run. Under `for_all` each body is enumerated exhaustively over its bounded choices; under
 //! Kani the same body is a proof over all values in the same ranges.
 use crate::{Chooser, INTERESTING_F64};
+use lbdem_kernels::fluid::aa::{
+    local_row, plane_row, post_collision_offset, scatter_row, AaStep, Layout,
+};
 use lbdem_kernels::fluid::boundary::{Boundaries, SideCondition};
 use lbdem_kernels::fluid::collide::{PsmParams, SolidOperator, SolidShare, Weighting};
 use lbdem_kernels::fluid::d2q9::equilibrium;
@@ -164,6 +168,80 @@ pub fn bulk_rows_band(c: &mut dyn Chooser, max: usize) {
                     assert_eq!(plane[node], tag(q, from), "pull of q={q} at ({x},{y})");
                 } else {
                     assert!(plane[node].is_nan(), "rows outside the band are untouched");
+                }
+            }
+        }
+    }
+}
+
+/// The in-place (AA) bulk pass over every lattice up to `max`, split into two bands of rows at `ym` and run
+/// band by band: the rows handed to the kernel by [`plane_row`] cover each plane row exactly once, all slice
+/// arithmetic stays in bounds (a violation panics), and with an identity collision the scatter step leaves
+/// P_i(x) = src_i(x − c_i) (one periodic pull) where [`post_collision_offset`] says the streamed layout keeps
+/// it, and the local step after it leaves src_i(x − 2 c_i) (two pulls) in the plain layout.
+/// Choices: nx, ny, ym ∈ 0..=ny (f64 only). Runs: max Σ_{n=1..max} (n + 1).
+pub fn aa_bulk_rows_band(c: &mut dyn Chooser, max: usize) {
+    let nx = c.usize_in(1, max);
+    let ny = c.usize_in(1, max);
+    let ym = c.usize_in(0, ny);
+    let shape = LatticeShape::for_type::<f64>(nx, ny).expect("small shapes are accepted");
+    let mut buf = vec![f64::NAN; shape.buffer_len()];
+    for (q, plane) in planes_mut(&shape, &mut buf).into_iter().enumerate() {
+        for (node, v) in plane.iter_mut().enumerate() {
+            *v = tag(q, node);
+        }
+    }
+    let flags = vec![FLUID; shape.nodes()];
+    let pull = |x: usize, y: usize, q: usize, times: usize| {
+        let v = VELOCITIES[q];
+        let fx = (x as i64 - times as i64 * v[0] as i64).rem_euclid(nx as i64) as usize;
+        let fy = (y as i64 - times as i64 * v[1] as i64).rem_euclid(ny as i64) as usize;
+        shape.index(fx, fy)
+    };
+    for step in [AaStep::Scatter, AaStep::Local] {
+        {
+            let mut rows: Vec<Vec<Option<&mut [f64]>>> = planes_mut(&shape, &mut buf)
+                .into_iter()
+                .map(|plane| plane.chunks_mut(nx).map(Some).collect())
+                .collect();
+            let mut table: Vec<[&mut [f64]; Q]> = (0..ny)
+                .map(|y| {
+                    core::array::from_fn(|p| {
+                        let r = plane_row(step, p, y, ny);
+                        assert!(r < ny);
+                        rows[p][r]
+                            .take()
+                            .expect("each plane row is handed out once")
+                    })
+                })
+                .collect();
+            assert!(
+                rows.iter().flatten().all(Option::is_none),
+                "every plane row is handed out"
+            );
+            let (lower, upper) = table.split_at_mut(ym);
+            let identity = |_f: &mut [f64; Q]| {};
+            for rows in [lower, upper] {
+                for r in rows.iter_mut() {
+                    assert!(r.iter().all(|row| row.len() == nx));
+                    match step {
+                        AaStep::Scatter => scatter_row(r, &identity),
+                        AaStep::Local => local_row(r, &identity),
+                    }
+                }
+            }
+        }
+        for y in 0..ny {
+            for x in 0..nx {
+                let node = shape.index(x, y);
+                for q in 0..Q {
+                    let (layout, times) = match step {
+                        AaStep::Scatter => (Layout::Streamed, 1),
+                        AaStep::Local => (Layout::Collided, 2),
+                    };
+                    let at = post_collision_offset(&shape, [true, true], &flags, layout, node, q);
+                    assert!(at < shape.buffer_len());
+                    assert_eq!(buf[at], tag(q, pull(x, y, q, times)), "q={q} at ({x},{y})");
                 }
             }
         }

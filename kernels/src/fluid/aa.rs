@@ -1,0 +1,284 @@
+//! The in-place "AA pattern" update (Bailey et al. 2009): one population buffer instead of two, each step
+//! reading and writing the same nine values per node. A two-lattice update moves 9 reads + 9 writes + 9
+//! write-allocate reads per node; this one moves 9 reads + 9 writes, and needs half the memory.
+//!
+//! Steps alternate between two storage layouts of the same buffer. Writing P_i(x) for the post-collision
+//! population of direction i at node x (what the two-lattice scheme of [`super::step`] stores at `(i, x)`):
+//!
+//! * [`Layout::Collided`]: `(i, x)` holds P_i(x): exactly the two-lattice buffer.
+//! * [`Layout::Streamed`]: P_i(x) has already been moved to the node it streams to, x + c_i, and is kept there
+//!   in the reversed slot: `(ī, x + c_i)` holds P_i(x). Where x + c_i is a solid obstacle node or lies outside a
+//!   non-periodic side, P_i(x) stays at home in `(i, x)`, which is exactly where the half-way bounce-back of the
+//!   next step looks for it. Solid obstacle nodes keep the rest equilibrium in their own slots.
+//!
+//! A step from `Collided` ([`AaStep::Scatter`]) gathers at x the values `(i, x − c_i)` (the pull of the
+//! two-lattice scheme), collides, and writes P'_ī(x) back into `(i, x − c_i)`: each node reads and writes the
+//! same nine locations, and no two nodes share one, so the step is in place and order-free. The result is in
+//! `Streamed` layout. A step from `Streamed` ([`AaStep::Local`]) gathers at x the values `(ī, x)`, which are
+//! the streamed populations arriving at x (bounce-back included), collides and writes P'_i(x) into `(i, x)`:
+//! purely local, and the result is in `Collided` layout again.
+//!
+//! Every node sees bitwise the same gathered populations and collision as in the two-lattice scheme, so the
+//! buffer after an even number of steps is bitwise the two-lattice buffer, and after an odd number it holds the
+//! same values at other places ([`post_collision_offset`] says where).
+//!
+//! As in [`super::step`], the bulk kernels here treat every node as an interior periodic node; nodes on
+//! non-periodic sides, next to obstacles, solid or covered by moving solids are computed separately by the
+//! caller from the untouched buffer *before* the bulk pass and stored *after* it at the places
+//! [`post_collision_offset`] gives (the bulk pass writes garbage only into places that belong to such nodes).
+use super::collide::{bgk_collide, bgk_collide_forced};
+use super::d2q9::{OPPOSITE, Q, VELOCITIES};
+use super::lattice::{LatticeShape, Neighbour};
+use super::step::{FluidParams, SOLID};
+use crate::Real;
+
+/// Where the post-collision populations of the single AA buffer are stored (see the module documentation).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Layout {
+    /// `(i, x)` holds P_i(x), as in the two-lattice scheme.
+    Collided,
+    /// `(ī, x + c_i)` holds P_i(x) (or `(i, x)` where x + c_i is solid or outside).
+    Streamed,
+}
+
+impl Layout {
+    /// The layout the next step leaves behind.
+    #[inline]
+    pub fn next(self) -> Self {
+        match self {
+            Layout::Collided => Layout::Streamed,
+            Layout::Streamed => Layout::Collided,
+        }
+    }
+}
+
+/// Which of the two AA steps a bulk pass performs.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum AaStep {
+    /// From [`Layout::Collided`] to [`Layout::Streamed`]: gather from and scatter to the neighbours.
+    Scatter,
+    /// From [`Layout::Streamed`] to [`Layout::Collided`]: read and write the node's own slots.
+    Local,
+}
+
+impl AaStep {
+    /// The step that starts from `layout`.
+    #[inline]
+    pub fn from(layout: Layout) -> Self {
+        match layout {
+            Layout::Collided => AaStep::Scatter,
+            Layout::Streamed => AaStep::Local,
+        }
+    }
+}
+
+/// Offset in the buffer of P_i at node `n` (the post-collision population of direction `i`) in `layout`.
+/// `periodic` = [along x, along y]. Solid obstacle nodes keep theirs at home.
+#[inline]
+pub fn post_collision_offset(
+    shape: &LatticeShape,
+    periodic: [bool; 2],
+    flags: &[u8],
+    layout: Layout,
+    n: usize,
+    i: usize,
+) -> usize {
+    if layout == Layout::Collided || flags[n] == SOLID {
+        return shape.offset(i, n);
+    }
+    let (x, y) = shape.coords(n);
+    match shape.neighbour(x, y, i, periodic) {
+        Neighbour::Node(j) if flags[j] != SOLID => shape.offset(OPPOSITE[i], j),
+        _ => shape.offset(i, n),
+    }
+}
+
+/// The post-collision populations P_0..P_8 of node `n` from a buffer in `layout`.
+#[inline]
+pub fn load_post_collision<T: Real>(
+    shape: &LatticeShape,
+    periodic: [bool; 2],
+    flags: &[u8],
+    layout: Layout,
+    buf: &[T],
+    n: usize,
+) -> [T; Q] {
+    core::array::from_fn(|i| buf[post_collision_offset(shape, periodic, flags, layout, n, i)])
+}
+
+/// Store the post-collision populations `f` of node `n` at their places in `layout`.
+#[inline]
+pub fn store_post_collision<T: Real>(
+    shape: &LatticeShape,
+    periodic: [bool; 2],
+    flags: &[u8],
+    layout: Layout,
+    buf: &mut [T],
+    n: usize,
+    f: &[T; Q],
+) {
+    for (i, &v) in f.iter().enumerate() {
+        buf[post_collision_offset(shape, periodic, flags, layout, n, i)] = v;
+    }
+}
+
+/// Rewrite a buffer from layout `from` into the two-lattice layout ([`Layout::Collided`]), into `out` (same
+/// length as `buf`; padding is copied as is).
+pub fn to_collided<T: Real>(
+    shape: &LatticeShape,
+    periodic: [bool; 2],
+    flags: &[u8],
+    from: Layout,
+    buf: &[T],
+    out: &mut [T],
+) {
+    out.copy_from_slice(buf);
+    if from == Layout::Collided {
+        return;
+    }
+    for n in 0..shape.nodes() {
+        let f = load_post_collision(shape, periodic, flags, from, buf, n);
+        for (i, v) in f.iter().enumerate() {
+            out[shape.offset(i, n)] = *v;
+        }
+    }
+}
+
+/// The rows one bulk pass works on for lattice row y: `rows[p]` is row `y − c_p,y` (wrapped) of plane p for
+/// [`AaStep::Scatter`], row y of plane p for [`AaStep::Local`]; each exactly `nx` long.
+pub fn plane_row(step: AaStep, p: usize, y: usize, ny: usize) -> usize {
+    match step {
+        AaStep::Local => y,
+        AaStep::Scatter => super::lattice::wrap_row(y, -VELOCITIES[p][1], ny),
+    }
+}
+
+/// Scatter step of one row, every node treated as an interior periodic node: node x gathers `rows[p][x − c_p,x]`
+/// (wrapped), collides with `collide`, and writes its post-collision population of direction p̄ back there.
+#[inline(always)]
+pub fn scatter_row<T: Real, C: Fn(&mut [T; Q])>(rows: &mut [&mut [T]; Q], collide: &C) {
+    let nx = rows[0].len();
+    if nx == 0 {
+        return;
+    }
+    // Edge columns with wrap (for nx ≤ 2 every column is an edge column).
+    let edges: [usize; 2] = [0, nx - 1];
+    for (e, &x) in edges.iter().enumerate() {
+        if e == 1 && nx == 1 {
+            break;
+        }
+        let at: [usize; Q] = core::array::from_fn(|p| {
+            let cx = VELOCITIES[p][0];
+            if cx > 0 {
+                if x == 0 {
+                    nx - 1
+                } else {
+                    x - 1
+                }
+            } else if cx < 0 {
+                if x + 1 == nx {
+                    0
+                } else {
+                    x + 1
+                }
+            } else {
+                x
+            }
+        });
+        let mut f: [T; Q] = core::array::from_fn(|p| rows[p][at[p]]);
+        collide(&mut f);
+        for p in 0..Q {
+            rows[p][at[p]] = f[OPPOSITE[p]];
+        }
+    }
+    if nx < 3 {
+        return;
+    }
+    let n = nx - 2;
+    let [r0, r1, r2, r3, r4, r5, r6, r7, r8] = rows;
+    // Plane p of interior node x = 1 + k lives at index 1 + k − c_p,x.
+    let s0 = &mut r0[1..1 + n];
+    let s1 = &mut r1[..n];
+    let s2 = &mut r2[1..1 + n];
+    let s3 = &mut r3[2..2 + n];
+    let s4 = &mut r4[1..1 + n];
+    let s5 = &mut r5[..n];
+    let s6 = &mut r6[2..2 + n];
+    let s7 = &mut r7[2..2 + n];
+    let s8 = &mut r8[..n];
+    for k in 0..n {
+        let mut f = [
+            s0[k], s1[k], s2[k], s3[k], s4[k], s5[k], s6[k], s7[k], s8[k],
+        ];
+        collide(&mut f);
+        s0[k] = f[0];
+        s1[k] = f[3];
+        s2[k] = f[4];
+        s3[k] = f[1];
+        s4[k] = f[2];
+        s5[k] = f[7];
+        s6[k] = f[8];
+        s7[k] = f[5];
+        s8[k] = f[6];
+    }
+}
+
+/// Local step of one row: node x gathers `rows[p̄][x]` as its population p, collides with `collide`, and writes
+/// population p into `rows[p][x]`.
+#[inline(always)]
+pub fn local_row<T: Real, C: Fn(&mut [T; Q])>(rows: &mut [&mut [T]; Q], collide: &C) {
+    let nx = rows[0].len();
+    let [r0, r1, r2, r3, r4, r5, r6, r7, r8] = rows;
+    let (r1, r2, r3, r4) = (&mut r1[..nx], &mut r2[..nx], &mut r3[..nx], &mut r4[..nx]);
+    let (r5, r6, r7, r8) = (&mut r5[..nx], &mut r6[..nx], &mut r7[..nx], &mut r8[..nx]);
+    let r0 = &mut r0[..nx];
+    for k in 0..nx {
+        let mut f = [
+            r0[k], r3[k], r4[k], r1[k], r2[k], r7[k], r8[k], r5[k], r6[k],
+        ];
+        collide(&mut f);
+        r0[k] = f[0];
+        r1[k] = f[1];
+        r2[k] = f[2];
+        r3[k] = f[3];
+        r4[k] = f[4];
+        r5[k] = f[5];
+        r6[k] = f[6];
+        r7[k] = f[7];
+        r8[k] = f[8];
+    }
+}
+
+/// The bulk pass of one AA step over a band of rows (each entry as [`plane_row`] describes), with the fluid's
+/// collision (BGK, or BGK with Guo forcing when a force is set). Inlined into its caller, so a caller compiled
+/// with wider vector instructions (`#[target_feature]`) gets the loops in those instructions.
+#[inline(always)]
+pub fn aa_bulk_rows<T: Real>(rows: &mut [[&mut [T]; Q]], step: AaStep, params: &FluidParams<T>) {
+    let omega = T::one() / params.tau;
+    if params.forced() {
+        let force = params.force;
+        let c = |f: &mut [T; Q]| bgk_collide_forced(f, omega, force);
+        aa_rows_with(rows, step, &c);
+    } else {
+        let c = |f: &mut [T; Q]| bgk_collide(f, omega);
+        aa_rows_with(rows, step, &c);
+    }
+}
+
+#[inline(always)]
+fn aa_rows_with<T: Real, C: Fn(&mut [T; Q])>(rows: &mut [[&mut [T]; Q]], step: AaStep, c: &C) {
+    // Plain loops (not `for_each`, which may be left out of line and so compiled without the caller's
+    // `#[target_feature]`s).
+    match step {
+        AaStep::Scatter => {
+            for r in rows.iter_mut() {
+                scatter_row(r, c);
+            }
+        }
+        AaStep::Local => {
+            for r in rows.iter_mut() {
+                local_row(r, c);
+            }
+        }
+    }
+}
