@@ -9,10 +9,13 @@
 use lbdem_kernels::coupling::{
     body_cell_range, reduce_exchange, rigid_velocity, BodyShape, CoupledBody, PreparedBody,
 };
-use lbdem_kernels::fluid::aa::{plane_row, store_post_collision, to_collided, AaStep, Layout};
+use lbdem_kernels::fluid::aa::{
+    load_from_rows, plane_row, store_in_rows, store_post_collision_in_plane, to_collided, AaStep,
+    Layout,
+};
 use lbdem_kernels::fluid::boundary::{Boundaries, SideCondition};
-use lbdem_kernels::fluid::collide::{PsmParams, SolidOperator, SolidShare, Weighting};
-use lbdem_kernels::fluid::d2q9::{equilibrium, Q};
+use lbdem_kernels::fluid::collide::{psm_collide, PsmParams, SolidOperator, SolidShare, Weighting};
+use lbdem_kernels::fluid::d2q9::{equilibrium, OPPOSITE, Q};
 use lbdem_kernels::fluid::lattice::{LatticeShape, Side};
 use lbdem_kernels::fluid::step::{
     classify_special_nodes, collide_covered_nodes, covered_node_value, fix_special_nodes,
@@ -84,6 +87,8 @@ pub struct FluidLattice<T: Real> {
     params: FluidParams<T>,
     flags: Vec<u8>,
     special: Vec<u32>,
+    /// Whether each node is in `special`.
+    special_mask: Vec<bool>,
     /// The population buffers in one allocation: `[first | gap | second]` (see [`buffer_gap`]) for the
     /// two-lattice scheme, `[first]` only for the in-place scheme.
     buffers: Vec<T>,
@@ -179,6 +184,13 @@ fn on_zou_he_side<T: Real>(s: &LatticeShape, bc: &Boundaries<T>, x: usize, y: us
         || (y + 1 == s.ny && bc.north.is_zou_he())
 }
 
+/// Special nodes per parallel task in phase 1 of the in-place step.
+const SPECIAL_CHUNK: usize = 1024;
+
+/// The covered nodes of one band of rows in the in-place step: index range in the covered list, their exchange
+/// entries, their new values.
+type CoveredBand<'a, T> = (usize, usize, &'a mut [[T; 2]], &'a mut [Option<[T; Q]>]);
+
 /// Nodes covered by solids (compressed rows), the solid each share belongs to, and the momentum handed to
 /// each share at the last step.
 struct Coverage<T> {
@@ -239,6 +251,7 @@ impl<T: Real> FluidLattice<T> {
             params,
             flags: vec![FLUID; shape.nodes()],
             special: Vec::new(),
+            special_mask: Vec::new(),
             buffers: vec![T::zero(); buffers_len::<T>(len, streaming)],
             second: len + buffer_gap::<T>(len),
             first_is_current: true,
@@ -358,6 +371,10 @@ impl<T: Real> FluidLattice<T> {
         let mut list = vec![0u32; self.shape.nodes()];
         let count = classify_special_nodes(&self.shape, &self.bc, &self.flags, &mut list);
         list.truncate(count);
+        self.special_mask = vec![false; self.shape.nodes()];
+        for &n in &list {
+            self.special_mask[n as usize] = true;
+        }
         self.special = list;
     }
 
@@ -660,13 +677,16 @@ impl<T: Real> FluidLattice<T> {
     }
 
     /// One step of the in-place (AA) scheme, in three phases:
-    /// 1. in parallel, read only: the new values of the special nodes and the covered nodes (with their momentum
-    ///    exchange), gathered from the buffer as it is;
-    /// 2. in parallel over bands of rows: the branch-free bulk pass over every node, in place;
-    /// 3. in order: the values of phase 1 stored at their places, overwriting what phase 2 wrote there.
+    /// 1. in parallel, read only: the new values of the special nodes (and of the covered ones among them, with
+    ///    their momentum exchange), gathered from the buffer as it is;
+    /// 2. in parallel over bands of rows, in place: the covered nodes that are not special gathered from the
+    ///    band's rows and collided with the partially-saturated operator, the branch-free bulk pass over every
+    ///    node of the band, then the covered nodes' values stored over what the bulk pass wrote for them (a node
+    ///    that is not special reads and writes only places among its band's own);
+    /// 3. in parallel over the nine planes: the values of phase 1 stored at their places.
     fn step_in_place(&mut self) {
-        const CHUNK: usize = 1024;
         let shape = self.shape;
+        let nx = shape.nx;
         let periodic = self.bc.periodic_axes();
         let (params, simd, band_rows) = (self.params, self.simd, self.band_rows);
         let layout = self.layout;
@@ -675,68 +695,78 @@ impl<T: Real> FluidLattice<T> {
         let mut special_vals = std::mem::take(&mut self.aa_special);
         let mut covered_vals = std::mem::take(&mut self.aa_covered);
         let range = self.current_range();
+        let domain = Domain {
+            shape,
+            bc: self.bc,
+            flags: &self.flags,
+        };
+        let mask = &self.special_mask;
+        let psm = self.coverage.as_ref().map(|c| PsmParams {
+            tau: params.tau,
+            weighting: c.weighting,
+            force: params.force,
+            solid: self.solid_operator,
+        });
+        let (covered, offsets, shares, exchange): (&[u32], &[u32], &[SolidShare<T>], _) =
+            match &mut self.coverage {
+                Some(c) => (
+                    &c.nodes[..],
+                    &c.offsets[..],
+                    &c.shares[..],
+                    &mut c.exchange[..],
+                ),
+                None => (&[], &[0], &[], &mut [][..]),
+            };
+        // Every entry is rewritten below (phase 1 for the special covered nodes, phase 2 for the others).
+        covered_vals.resize(covered.len(), None);
+        // The covered nodes, their values and their exchange entries, split along the bands of rows.
+        let bands = shape.ny.div_ceil(band_rows);
+        let mut work: Vec<CoveredBand<'_, T>> = Vec::with_capacity(bands);
+        {
+            let (mut ex_rest, mut vals_rest) = (exchange, &mut covered_vals[..]);
+            let mut lo = 0;
+            for b in 0..bands {
+                let end = (((b + 1) * band_rows).min(shape.ny) * nx) as u32;
+                let hi = lo + covered[lo..].partition_point(|&n| n < end);
+                let len = (offsets[hi] - offsets[lo]) as usize;
+                let (ex, rest) = std::mem::take(&mut ex_rest).split_at_mut(len);
+                ex_rest = rest;
+                let (vals, rest) = std::mem::take(&mut vals_rest).split_at_mut(hi - lo);
+                vals_rest = rest;
+                work.push((lo, hi, ex, vals));
+                lo = hi;
+            }
+        }
         // Phase 1.
         {
-            let domain = Domain {
-                shape,
-                bc: self.bc,
-                flags: &self.flags,
-            };
             let buf = &self.buffers[range.clone()];
             special_vals.resize(self.special.len(), [T::zero(); Q]);
             self.special
-                .par_chunks(CHUNK)
-                .zip(special_vals.par_chunks_mut(CHUNK))
+                .par_chunks(SPECIAL_CHUNK)
+                .zip(special_vals.par_chunks_mut(SPECIAL_CHUNK))
                 .for_each(|(nodes, vals)| {
                     for (&n, v) in nodes.iter().zip(vals.iter_mut()) {
                         *v = special_node_value(&domain, buf, layout, &params, n as usize);
                     }
                 });
-            if let Some(cov) = &mut self.coverage {
-                let psm = PsmParams {
-                    tau: params.tau,
-                    weighting: cov.weighting,
-                    force: params.force,
-                    solid: self.solid_operator,
-                };
-                covered_vals.resize(cov.nodes.len(), None);
-                // Chunks of covered nodes with their share ranges and exchange entries.
-                let mut work = Vec::with_capacity(cov.nodes.len().div_ceil(CHUNK));
-                let mut exchange_rest: &mut [[T; 2]] = &mut cov.exchange;
-                let mut vals_rest: &mut [Option<[T; Q]>] = &mut covered_vals;
-                for lo in (0..cov.nodes.len()).step_by(CHUNK) {
-                    let hi = (lo + CHUNK).min(cov.nodes.len());
-                    let len = (cov.offsets[hi] - cov.offsets[lo]) as usize;
-                    let (ex, rest) = std::mem::take(&mut exchange_rest).split_at_mut(len);
-                    exchange_rest = rest;
-                    let (vals, rest) = std::mem::take(&mut vals_rest).split_at_mut(hi - lo);
-                    vals_rest = rest;
-                    work.push((lo, hi, ex, vals));
-                }
-                let (nodes, offsets, shares) = (&cov.nodes, &cov.offsets, &cov.shares);
-                work.into_par_iter().for_each(|(lo, hi, ex, vals)| {
-                    let first = offsets[lo] as usize;
-                    for (k, v) in (lo..hi).zip(vals.iter_mut()) {
-                        let (a, b) = (offsets[k] as usize, offsets[k + 1] as usize);
-                        *v = covered_node_value(
-                            &domain,
-                            buf,
-                            layout,
-                            &psm,
-                            nodes[k] as usize,
-                            &shares[a..b],
-                            &mut ex[a - first..b - first],
-                        );
+            if let Some(psm) = &psm {
+                work.par_iter_mut().for_each(|(lo, hi, ex, vals)| {
+                    let first = offsets[*lo] as usize;
+                    for (k, v) in (*lo..*hi).zip(vals.iter_mut()) {
+                        let n = covered[k] as usize;
+                        if mask[n] {
+                            let (a, b) = (offsets[k] as usize, offsets[k + 1] as usize);
+                            let ex = &mut ex[a - first..b - first];
+                            *v =
+                                covered_node_value(&domain, buf, layout, psm, n, &shares[a..b], ex);
+                        }
                     }
                 });
-            } else {
-                covered_vals.clear();
             }
         }
         // Phase 2: row y of the pass needs row `plane_row(kind, p, y)` of each plane p; every plane row is
         // handed out exactly once.
         {
-            let nx = shape.nx;
             let buf = &mut self.buffers[range.clone()];
             let mut plane_rows: Vec<Vec<Option<&mut [T]>>> = planes_mut(&shape, buf)
                 .into_iter()
@@ -752,21 +782,60 @@ impl<T: Real> FluidLattice<T> {
                 })
                 .collect();
             rows.par_chunks_mut(band_rows)
-                .for_each(|band| aa_bulk_exec(simd, band, kind, &params));
-        }
-        // Phase 3.
-        {
-            let (buf, flags) = (&mut self.buffers[range], &self.flags);
-            for (&n, f) in self.special.iter().zip(&special_vals) {
-                store_post_collision(&shape, periodic, flags, after, buf, n as usize, f);
-            }
-            if let Some(cov) = &self.coverage {
-                for (&n, f) in cov.nodes.iter().zip(&covered_vals) {
-                    if let Some(f) = f {
-                        store_post_collision(&shape, periodic, flags, after, buf, n as usize, f);
+                .zip(work.par_iter_mut())
+                .enumerate()
+                .for_each(|(b, (band, (lo, hi, ex, vals)))| {
+                    let y0 = b * band_rows;
+                    let first = offsets[*lo] as usize;
+                    let own = |k: usize| !mask[covered[k] as usize];
+                    if let Some(psm) = &psm {
+                        for (k, v) in (*lo..*hi).zip(vals.iter_mut()).filter(|(k, _)| own(*k)) {
+                            let n = covered[k] as usize;
+                            let mut f = load_from_rows(band, kind, y0, n % nx, n / nx);
+                            let (a, b) = (offsets[k] as usize, offsets[k + 1] as usize);
+                            psm_collide(&mut f, psm, &shares[a..b], &mut ex[a - first..b - first]);
+                            *v = Some(f);
+                        }
                     }
-                }
-            }
+                    aa_bulk_exec(simd, band, kind, &params);
+                    for (k, v) in (*lo..*hi).zip(vals.iter()).filter(|(k, _)| own(*k)) {
+                        if let Some(f) = v {
+                            let n = covered[k] as usize;
+                            store_in_rows(band, kind, y0, n % nx, n / nx, f);
+                        }
+                    }
+                });
+        }
+        drop(work);
+        // Phase 3: special nodes, then the covered ones among them (whose values win, as in the two-lattice
+        // scheme).
+        {
+            let flags = &self.flags[..];
+            let covered_special: Vec<usize> = (0..covered.len())
+                .into_par_iter()
+                .filter(|&k| mask[covered[k] as usize] && covered_vals[k].is_some())
+                .collect();
+            let buf = &mut self.buffers[range];
+            let (special, sv, cv) = (&self.special[..], &special_vals, &covered_vals);
+            planes_mut(&shape, buf)
+                .into_par_iter()
+                .enumerate()
+                .for_each(|(p, plane)| {
+                    let store = |plane: &mut [T], n: u32, f: &[T; Q]| {
+                        let (fp, fo) = (f[p], f[OPPOSITE[p]]);
+                        store_post_collision_in_plane(
+                            &shape, periodic, flags, after, p, plane, n as usize, fp, fo,
+                        );
+                    };
+                    for (&n, f) in special.iter().zip(sv) {
+                        store(plane, n, f);
+                    }
+                    for &k in &covered_special {
+                        if let Some(f) = &cv[k] {
+                            store(plane, covered[k], f);
+                        }
+                    }
+                });
         }
         self.layout = after;
         self.aa_special = special_vals;

@@ -122,6 +122,55 @@ pub fn store_post_collision<T: Real>(
     }
 }
 
+/// Store into plane `p` (the slice of plane p, `shape.nodes()` long) those post-collision populations of node `n`
+/// that `layout` keeps in plane p: P_p(n) where it stays at home, and P_p̄(n) where it has moved to n + c_p̄.
+/// Running this for the nine planes stores what [`store_post_collision`] stores, so the planes can be filled
+/// independently (in parallel). `f_p` = P_p(n), `f_opp` = P_p̄(n).
+#[inline]
+#[allow(clippy::too_many_arguments)]
+pub fn store_post_collision_in_plane<T: Real>(
+    shape: &LatticeShape,
+    periodic: [bool; 2],
+    flags: &[u8],
+    layout: Layout,
+    p: usize,
+    plane: &mut [T],
+    n: usize,
+    f_p: T,
+    f_opp: T,
+) {
+    if layout == Layout::Collided || flags[n] == SOLID {
+        plane[n] = f_p;
+        return;
+    }
+    let (x, y) = shape.coords(n);
+    let c = VELOCITIES[p];
+    if x > 0 && y > 0 && x + 1 < shape.nx && y + 1 < shape.ny {
+        // Interior node: n ± c_p are nodes, no wrap. n + c_p̄ = n − c_p, written with non-negative terms.
+        let nx = shape.nx;
+        let back = n + nx + 1 - (1 + c[0]) as usize - (1 + c[1]) as usize * nx;
+        let ahead = n + (1 + c[0]) as usize + (1 + c[1]) as usize * nx - nx - 1;
+        if flags[back] != SOLID {
+            plane[back] = f_opp;
+        }
+        if flags[ahead] == SOLID {
+            plane[n] = f_p;
+        }
+        return;
+    }
+    // P_p̄(n) moves to (p, n + c_p̄) when that node is fluid.
+    if let Neighbour::Node(j) = shape.neighbour(x, y, OPPOSITE[p], periodic) {
+        if flags[j] != SOLID {
+            plane[j] = f_opp;
+        }
+    }
+    // P_p(n) stays at (p, n) when n + c_p is solid or outside.
+    match shape.neighbour(x, y, p, periodic) {
+        Neighbour::Node(j) if flags[j] != SOLID => {}
+        _ => plane[n] = f_p,
+    }
+}
+
 /// Rewrite a buffer from layout `from` into the two-lattice layout ([`Layout::Collided`]), into `out` (same
 /// length as `buf`; padding is copied as is).
 pub fn to_collided<T: Real>(
@@ -167,24 +216,7 @@ pub fn scatter_row<T: Real, C: Fn(&mut [T; Q])>(rows: &mut [&mut [T]; Q], collid
         if e == 1 && nx == 1 {
             break;
         }
-        let at: [usize; Q] = core::array::from_fn(|p| {
-            let cx = VELOCITIES[p][0];
-            if cx > 0 {
-                if x == 0 {
-                    nx - 1
-                } else {
-                    x - 1
-                }
-            } else if cx < 0 {
-                if x + 1 == nx {
-                    0
-                } else {
-                    x + 1
-                }
-            } else {
-                x
-            }
-        });
+        let at: [usize; Q] = core::array::from_fn(|p| scatter_column(p, x, nx));
         let mut f: [T; Q] = core::array::from_fn(|p| rows[p][at[p]]);
         collide(&mut f);
         for p in 0..Q {
@@ -246,6 +278,69 @@ pub fn local_row<T: Real, C: Fn(&mut [T; Q])>(rows: &mut [&mut [T]; Q], collide:
         r6[k] = f[6];
         r7[k] = f[7];
         r8[k] = f[8];
+    }
+}
+
+/// Column of plane p read and written by node x in a scatter step: x − c_p,x, wrapped.
+#[inline(always)]
+fn scatter_column(p: usize, x: usize, nx: usize) -> usize {
+    let cx = VELOCITIES[p][0];
+    if cx > 0 {
+        if x == 0 {
+            nx - 1
+        } else {
+            x - 1
+        }
+    } else if cx < 0 {
+        if x + 1 == nx {
+            0
+        } else {
+            x + 1
+        }
+    } else {
+        x
+    }
+}
+
+/// The populations node (x, y) gathers in the bulk pass of `step`, from a band of rows as [`plane_row`]
+/// describes it (`rows[y − y0]`). Right for every node that is not special: such a node's gather is the bulk
+/// pass's.
+#[inline]
+pub fn load_from_rows<T: Real>(
+    rows: &[[&mut [T]; Q]],
+    step: AaStep,
+    y0: usize,
+    x: usize,
+    y: usize,
+) -> [T; Q] {
+    let r = &rows[y - y0];
+    let nx = r[0].len();
+    match step {
+        AaStep::Local => core::array::from_fn(|p| r[OPPOSITE[p]][x]),
+        AaStep::Scatter => core::array::from_fn(|p| r[p][scatter_column(p, x, nx)]),
+    }
+}
+
+/// Store the post-collision populations `f` of node (x, y) at the places the bulk pass of `step` writes them,
+/// in a band of rows as [`plane_row`] describes it (`rows[y − y0]`). Right for every node that is not special
+/// (see [`super::step::classify_special_nodes`]): such a node's places are the bulk pass's.
+#[inline]
+pub fn store_in_rows<T: Real>(
+    rows: &mut [[&mut [T]; Q]],
+    step: AaStep,
+    y0: usize,
+    x: usize,
+    y: usize,
+    f: &[T; Q],
+) {
+    let r = &mut rows[y - y0];
+    let nx = r[0].len();
+    for p in 0..Q {
+        match step {
+            AaStep::Local => r[p][x] = f[p],
+            // Node x gathered plane p at x − c_p,x and writes P_p̄ back there.
+            AaStep::Scatter => r[p][scatter_column(p, x, nx)] = f[OPPOSITE[p]],
+        }
     }
 }
 
