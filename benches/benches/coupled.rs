@@ -14,6 +14,7 @@
 //! were introduced when this bench used Ω₃, which is unstable with free grains: see the kernel's `SolidOperator`
 //! documentation.) Regenerate with `cargo bench -p lbdem-benches --bench coupled`; the
 //! packing takes ~20 s before the first case. `examples/coupled_split.rs` prints the same split without criterion.
+//! The fluid streams in place (AA) unless `LBDEM_STREAMING=two-lattice` is set; the title line names the scheme.
 #[path = "../src/coupled_scene.rs"]
 mod coupled_scene;
 
@@ -140,7 +141,8 @@ fn print_summary(grains: usize, bonds: usize) {
     println!();
     println!(
         "=== coupled step, {NX} x {NY} lattice, {grains} ellipse grains (aspect 0.5), {bonds} bonds, fluid radius \
-         {FLUID_RADIUS}, Ω₁ₗ (median of {SAMPLES} samples) ==="
+         {FLUID_RADIUS}, Ω₁ₗ, {} streaming (median of {SAMPLES} samples) ===",
+        lbdem::lattice::default_streaming().name()
     );
     println!(
         "{:<4} {:>7} {:>9} {:>9} {:>8} {:>9} {:>9} {:>6} {:>8} {:>7}",
@@ -183,6 +185,12 @@ fn print_summary(grains: usize, bonds: usize) {
 
 fn main() {
     let load_before = load_average();
+    if let Some(s) = std::env::var("LBDEM_STREAMING")
+        .ok()
+        .and_then(|v| lbdem::lattice::Streaming::from_name(&v))
+    {
+        lbdem::lattice::set_default_streaming(s);
+    }
     let start = Instant::now();
     let dem = coupled_scene::packed_grains();
     println!(

@@ -63,9 +63,10 @@ fn run<T: Real>(kind: &str, n: usize, steps: usize, simd: &str) {
     }
     let t = start.elapsed().as_secs_f64();
     println!(
-        "{kind} {} {n}² {steps} steps ({}): {:.1} MLUPS",
+        "{kind} {} {n}² {steps} steps ({}, {}): {:.1} MLUPS",
         T::NAME,
         l.simd().name(),
+        l.streaming().name(),
         (n * n * steps) as f64 / t / 1e6
     );
 }

@@ -1,8 +1,11 @@
 //! [`Persist`] for [`FluidLattice`]: shape, side conditions, collision parameters, node flags, the current
 //! population buffer (every plane in full, padding included), the step counter, the PSM coverage (covered
 //! nodes, shares, owners, the momentum exchanged at the last step, the weighting) and the solid operator. The
-//! special-node list is derived from the flags and rebuilt; the second population buffer is scratch (every
-//! node of it is rewritten by the next step before it is read); the band height only changes speed.
+//! special-node list is derived from the flags and rebuilt. The populations are saved in the two-lattice layout
+//! whatever the streaming scheme and step parity (see [`FluidLattice::populations`]), and a loaded lattice starts
+//! from that layout with the scheme chosen for the new process: either continues bitwise as the saved run would
+//! have. The two-lattice scheme's second buffer is scratch (every node of it is rewritten by the next step before
+//! it is read); the band height only changes speed.
 use lbdem_kernels::fluid::lattice::LatticeShape;
 use lbdem_kernels::Real;
 
