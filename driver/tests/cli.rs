@@ -1,6 +1,6 @@
 //! The command line: bad scenes give clear errors (never a panic), a good scene writes its outputs, and a
 //! previous run is not overwritten without --overwrite.
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::Command;
 
 fn lbdem() -> Command {
@@ -156,6 +156,19 @@ fn check_prints_derived_parameters_without_running() {
     }
 }
 
+/// `lbdem run SCENE --out OUT --quiet EXTRA…`.
+fn run_quietly(scene: &Path, out: &Path, extra: &[&str]) -> std::process::Output {
+    lbdem()
+        .arg("run")
+        .arg(scene)
+        .arg("--out")
+        .arg(out)
+        .arg("--quiet")
+        .args(extra)
+        .output()
+        .unwrap()
+}
+
 #[test]
 fn every_simd_level_the_cpu_has_writes_the_same_profile_and_unknown_levels_are_refused() {
     let dir = scratch("simd");
@@ -164,16 +177,7 @@ fn every_simd_level_the_cpu_has_writes_the_same_profile_and_unknown_levels_are_r
     let mut profiles = Vec::new();
     for level in ["baseline", "avx2", "avx512"] {
         let out = dir.join(level);
-        let o = lbdem()
-            .args([
-                "run",
-                scene.to_str().unwrap(),
-                "--out",
-                out.to_str().unwrap(),
-            ])
-            .args(["--quiet", "--simd", level])
-            .output()
-            .unwrap();
+        let o = run_quietly(&scene, &out, &["--simd", level]);
         let err = String::from_utf8_lossy(&o.stderr);
         let available = lbdem::exec::SimdLevel::from_name(level).is_some_and(|l| l.available());
         if available {
@@ -208,16 +212,7 @@ fn both_streaming_schemes_write_the_same_profile_and_say_which_ran() {
     let mut profiles = Vec::new();
     for scheme in ["aa", "two-lattice"] {
         let out = dir.join(scheme);
-        let o = lbdem()
-            .args([
-                "run",
-                scene.to_str().unwrap(),
-                "--out",
-                out.to_str().unwrap(),
-            ])
-            .args(["--quiet", "--streaming", scheme])
-            .output()
-            .unwrap();
+        let o = run_quietly(&scene, &out, &["--streaming", scheme]);
         assert!(
             o.status.success(),
             "--streaming {scheme} failed: {}",

@@ -106,25 +106,9 @@ pub fn load_post_collision<T: Real>(
     core::array::from_fn(|i| buf[post_collision_offset(shape, periodic, flags, layout, n, i)])
 }
 
-/// Store the post-collision populations `f` of node `n` at their places in `layout`.
-#[inline]
-pub fn store_post_collision<T: Real>(
-    shape: &LatticeShape,
-    periodic: [bool; 2],
-    flags: &[u8],
-    layout: Layout,
-    buf: &mut [T],
-    n: usize,
-    f: &[T; Q],
-) {
-    for (i, &v) in f.iter().enumerate() {
-        buf[post_collision_offset(shape, periodic, flags, layout, n, i)] = v;
-    }
-}
-
 /// Store into plane `p` (the slice of plane p, `shape.nodes()` long) those post-collision populations of node `n`
 /// that `layout` keeps in plane p: P_p(n) where it stays at home, and P_p̄(n) where it has moved to n + c_p̄.
-/// Running this for the nine planes stores what [`store_post_collision`] stores, so the planes can be filled
+/// Running this for the nine planes stores each P_i(n) at [`post_collision_offset`], so the planes can be filled
 /// independently (in parallel). `f_p` = P_p(n), `f_opp` = P_p̄(n).
 #[inline]
 #[allow(clippy::too_many_arguments)]
