@@ -1,4 +1,4 @@
-//! Discrete-element kernels (issue 3): shapes, contact detection, contact and bond laws, integration.
+//! Discrete-element kernels: shapes, contact detection, contact and bond laws, integration.
 //!
 //! The solid half of the coupled model of the dissertation (ch. 2, ch. 4.2.1, ch. 6.6): rigid two-dimensional
 //! particles (discs and ellipses) and straight walls, a soft-contact law (linear spring–dashpot with Coulomb

@@ -35,6 +35,8 @@ use crate::Real;
 
 /// Which weighting function B(ε, τ) the partially-saturated collision uses.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(rename_all = "snake_case"))]
 pub enum Weighting {
     /// Noble & Torczynski's B(ε, τ) = ε(τ − ½)/((1 − ε) + (τ − ½)) (dissertation eq. 4.5). B(0)=0, B(1)=1.
     #[default]
@@ -45,11 +47,16 @@ pub enum Weighting {
 
 /// Which solid collision operator Ω^S the partially-saturated collision uses.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+// The names scene files use (the driver reads this enum directly): "bounce_back" (Ω₁), "superposition" (Ω₂),
+// "moving_wall" (Ω₃), "linearized" (Ω₁ₗ).
 pub enum SolidOperator {
     /// Ω₁, Noble & Torczynski's non-equilibrium bounce-back (dissertation eq. 4.6).
     #[default]
+    #[cfg_attr(feature = "serde", serde(rename = "bounce_back"))]
     NonEquilibriumBounceBack,
     /// Ω₂, the superposition operator of Holdych (2003) (Owen et al. 2011, eq. 29).
+    #[cfg_attr(feature = "serde", serde(rename = "superposition"))]
     Superposition,
     /// Ω₃ (Owen et al. 2011, eq. 33): f_ī − f_ī^eq(ρ, u_s) + f_i^eq(ρ, u_s) − f_i. At B = 1 this is the
     /// classic moving-wall bounce-back, f_i ← f_ī + 6 w_i ρ c_i·u_s: it never touches the rest population, so
@@ -57,12 +64,14 @@ pub enum SolidOperator {
     /// over per unit B is 2ρ(u_s − u), twice Ω₁'s. Not for free grains: at B = 1 it reverses the velocity of
     /// the fluid inside a grain relative to the grain, and with the grain's reaction the coupled mode grows by
     /// 1 + 2 m_fluid/m_grain per step (see the module notes).
+    #[cfg_attr(feature = "serde", serde(rename = "moving_wall"))]
     BounceBack,
     /// Ω₁ with the equilibrium difference linearised ("Ω₁ₗ"): f_ī − f_i + 3 w_i ρ c_i·(u + u_s). It is Ω₁ minus
     /// the part of f_i^eq(ρ, u_s) − f_ī^eq(ρ, u) that is even in c_i (second order in the Mach number), so it
     /// hands over exactly Ω₁'s momentum ρ(u_s − u) per unit B and sets the fluid velocity at a fully covered
     /// node to u_s as Ω₁ does (stable with free grains), but never touches the rest population: fully covered
     /// regions of open systems do not accumulate mass.
+    #[cfg_attr(feature = "serde", serde(rename = "linearized"))]
     LinearizedBounceBack,
 }
 
@@ -167,6 +176,7 @@ pub fn bgk_collide_slices<T: Real>(planes: [&mut [T]; Q], omega: T, force: [T; 2
 /// One solid covering part of a lattice cell: its solid fraction ε_s of the cell and its rigid-body velocity
 /// u_s = V + ω × (x − X) evaluated at the node.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct SolidShare<T> {
     /// Fraction of the cell area covered by this solid, in [0, 1].
     pub fraction: T,
