@@ -13,7 +13,7 @@
 //! (f32), with the bandwidth being the triad figure for the same thread count. The two-lattice scheme writes
 //! into a second buffer, so the hardware also reads each destination line before writing it (write-allocate):
 //! 216 B move per f64 update against the 144 counted, where the triad moves 32 B against 24. The in-place AA
-//! scheme (the default, `lbdem::lattice::Streaming`) writes the lines it has just read: 144 B move, so it can
+//! scheme (the default, `lbdem::engine::lattice::Streaming`) writes the lines it has just read: 144 B move, so it can
 //! exceed 100 % of this ceiling.
 //!
 //! Each case's time per iteration is the median of criterion's samples (taken through `iter_custom`); a table
@@ -32,8 +32,8 @@ use std::sync::Mutex;
 use std::time::{Duration, Instant};
 
 use criterion::{BenchmarkId, Criterion, Throughput};
-use lbdem::exec::SimdLevel;
-use lbdem::lattice::{FluidDisc, FluidLattice, Streaming};
+use lbdem::engine::exec::SimdLevel;
+use lbdem::engine::lattice::{FluidDisc, FluidLattice, Streaming};
 use lbdem_kernels::fluid::boundary::Boundaries;
 use lbdem_kernels::fluid::collide::Weighting;
 use lbdem_kernels::fluid::step::FluidParams;

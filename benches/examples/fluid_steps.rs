@@ -8,8 +8,8 @@
 //! 30 % of the area with a square grid of discs (Noble–Torczynski weighting).
 use std::time::Instant;
 
-use lbdem::exec::SimdLevel;
-use lbdem::lattice::{FluidDisc, FluidLattice, Streaming};
+use lbdem::engine::exec::SimdLevel;
+use lbdem::engine::lattice::{FluidDisc, FluidLattice, Streaming};
 use lbdem_kernels::fluid::boundary::Boundaries;
 use lbdem_kernels::fluid::collide::Weighting;
 use lbdem_kernels::fluid::step::FluidParams;

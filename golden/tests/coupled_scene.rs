@@ -11,10 +11,10 @@
 //! their summation orders) changes it. The step is bitwise deterministic for any thread count, SIMD level and
 //! streaming scheme, and in every build (transcendental functions go through `libm`), so the snapshot holds
 //! across all of them. A changed snapshot is reviewed, never blindly accepted.
-use lbdem::coupled::{CoupledWorld, LatticeMap};
-use lbdem::lattice::FluidLattice;
-use lbdem::solid::world::{BondLaw, BondSpec};
-use lbdem::solid::DemWorld;
+use lbdem::engine::coupled::{CoupledWorld, LatticeMap};
+use lbdem::engine::dem::world::{BondLaw, BondSpec};
+use lbdem::engine::dem::DemWorld;
+use lbdem::engine::lattice::FluidLattice;
 use lbdem_kernels::dem::assembly::ContactModel;
 use lbdem_kernels::dem::shape::Particle;
 use lbdem_kernels::fluid::boundary::Boundaries;
@@ -51,14 +51,15 @@ fn scene() -> CoupledWorld {
     )
     .unwrap();
     // A bonded cluster of 3 × 2 ellipses (aspect 0.6, semi-major 3.5) near the left, two free discs to its right.
-    let mut grains: Vec<Particle<f64>> = lbdem::solid::hexagonal_packing(3, 2, 3.5, 0.6, 0.0, 2.0, 0)
-        .into_iter()
-        .map(|mut p| {
-            p.position = [p.position[0] + 8.3, p.position[1] + 14.1];
-            p.velocity = [0.004, 0.0005];
-            p
-        })
-        .collect();
+    let mut grains: Vec<Particle<f64>> =
+        lbdem::engine::dem::hexagonal_packing(3, 2, 3.5, 0.6, 0.0, 2.0, 0)
+            .into_iter()
+            .map(|mut p| {
+                p.position = [p.position[0] + 8.3, p.position[1] + 14.1];
+                p.velocity = [0.004, 0.0005];
+                p
+            })
+            .collect();
     let mut a = Particle::disc([36.4, 18.7], 3.2, 2.0);
     a.velocity = [-0.012, 0.001];
     a.angular_velocity = 2e-3;
@@ -130,7 +131,12 @@ fn coupled_grains_collide_break_bonds_and_drag_the_fluid() {
     for b in &dem.bonds {
         bonds.word(b.intact() as u64);
         if let BondLaw::Point(p) = &b.law {
-            for v in [p.rest_gap[0], p.rest_gap[1], p.rest_angles[0], p.rest_angles[1]] {
+            for v in [
+                p.rest_gap[0],
+                p.rest_gap[1],
+                p.rest_angles[0],
+                p.rest_angles[1],
+            ] {
                 bonds.f(v);
             }
         }
@@ -161,12 +167,7 @@ fn coupled_grains_collide_break_bonds_and_drag_the_fluid() {
     for (i, p) in dem.particles.iter().enumerate() {
         out += &format!(
             "grain {i}: x {:?} {:?} angle {:?} v {:?} {:?} w {:?}\n",
-            p.position[0],
-            p.position[1],
-            p.angle,
-            p.velocity[0],
-            p.velocity[1],
-            p.angular_velocity
+            p.position[0], p.position[1], p.angle, p.velocity[0], p.velocity[1], p.angular_velocity
         );
     }
     for b in &dem.breaks {
