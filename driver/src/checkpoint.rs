@@ -51,7 +51,7 @@ use crate::output::write_atomic;
 /// First bytes of every checkpoint file.
 pub const MAGIC: [u8; 8] = *b"LBDEMCKP";
 /// Version of the layout; bumped whenever any [`Persist`] implementation changes what it writes.
-pub const FORMAT_VERSION: u32 = 1;
+pub const FORMAT_VERSION: u32 = 2;
 /// Name of the checkpoint inside a run directory.
 pub const CHECKPOINT_FILE: &str = "checkpoint.bin";
 /// Name of the state written when a run diverges (for inspection; never resumed from).

@@ -1,11 +1,13 @@
 //! [`Persist`] for [`FluidLattice`]: shape, side conditions, collision parameters, node flags, the current
 //! population buffer (every plane in full, padding included), the step counter, the PSM coverage (covered
-//! nodes, shares, owners, the momentum exchanged at the last step, the weighting) and the solid operator. The
+//! nodes, shares, owners, the momentum exchanged at the last step, the weighting), the solid operator and the
+//! fluid collision (BGK, or TRT with its magic parameter). The
 //! special-node list is derived from the flags and rebuilt. The populations are saved in the two-lattice layout
 //! whatever the streaming scheme and step parity (see [`FluidLattice::populations`]), and a loaded lattice starts
 //! from that layout with the scheme chosen for the new process: either continues bitwise as the saved run would
 //! have. The two-lattice scheme's second buffer is scratch (every node of it is rewritten by the next step before
 //! it is read); the band height only changes speed.
+use lbdem_kernels::fluid::collide::{Collision, Trt};
 use lbdem_kernels::fluid::lattice::LatticeShape;
 use lbdem_kernels::Real;
 
@@ -43,6 +45,13 @@ impl<T: Real> Persist for FluidLattice<T> {
                 e.put(&c.weighting);
             }
         }
+        match self.collision {
+            Collision::Bgk => e.u8(0),
+            Collision::Trt(t) => {
+                e.u8(1);
+                e.real(t.magic());
+            }
+        }
     }
 
     fn load(d: &mut Decoder<'_>) -> Result<Self> {
@@ -68,6 +77,18 @@ impl<T: Real> Persist for FluidLattice<T> {
             0 => None,
             _ => Some(load_coverage(d, &lattice.shape)?),
         };
+        let collision = match d.tag("fluid collision", 2)? {
+            0 => Collision::Bgk,
+            _ => {
+                let magic: T = d.real()?;
+                let trt = Trt::new(magic);
+                d.ensure(trt.is_ok(), || {
+                    format!("TRT magic parameter {}", magic.to_f64_exact())
+                })?;
+                Collision::Trt(trt.unwrap_or_default())
+            }
+        };
+        lattice.set_collision(collision)?;
         Ok(lattice)
     }
 }
