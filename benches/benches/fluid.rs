@@ -7,6 +7,9 @@
 //! * `bgk`: fully periodic lattice, BGK, no force, f32 and f64, 256², 1024², 2048², 1 and 2 threads.
 //! * `psm`: the same with ~30 % of the area covered by a square grid of discs (Noble–Torczynski weighting),
 //!   1024², f32 and f64, 1 and 2 threads.
+//! * `trt`, `psm-trt`: the `bgk` and `psm` cases with the two-relaxation-time collision (Λ = 3/16), same
+//!   sizes, run in the same process right after their BGK twins; the table ends with the time of a TRT node
+//!   over a BGK node for every pair measured (issue 11 target: ≤ 1.15).
 //!
 //! Both streaming schemes read 9 and write 9 populations per node update: 144 bytes per update in f64, 72 in
 //! f32, counted as STREAM counts (no write-allocate), so the MLUPS ceiling is bandwidth / 144 B (f64) or / 72 B
@@ -35,7 +38,7 @@ use criterion::{BenchmarkId, Criterion, Throughput};
 use lbdem::engine::exec::SimdLevel;
 use lbdem::engine::lattice::{FluidDisc, FluidLattice, Streaming};
 use lbdem_kernels::fluid::boundary::Boundaries;
-use lbdem_kernels::fluid::collide::Weighting;
+use lbdem_kernels::fluid::collide::{Collision, Trt, Weighting};
 use lbdem_kernels::fluid::step::FluidParams;
 use lbdem_kernels::Real;
 use rayon::prelude::*;
@@ -226,7 +229,11 @@ fn bench_lattice<T: Real>(c: &mut Criterion, kind: &str, sizes: &[usize], varian
                 let mut l = periodic_lattice::<T>(n);
                 l.set_simd(level).expect("level available");
                 l.set_streaming(streaming);
-                if kind == "psm" {
+                if kind.ends_with("trt") {
+                    l.set_collision(Collision::Trt(Trt::default()))
+                        .expect("valid TRT rates");
+                }
+                if kind.starts_with("psm") {
                     l.cover_with_discs(&disc_grid(n), Weighting::NobleTorczynski);
                 }
                 // First touch of the buffer(s) by the pool that will run the steps.
@@ -234,7 +241,7 @@ fn bench_lattice<T: Real>(c: &mut Criterion, kind: &str, sizes: &[usize], varian
                 l.step();
                 l
             });
-            if kind == "psm" {
+            if kind.starts_with("psm") {
                 let covered = lattice.covered_nodes() as f64 / (n * n) as f64;
                 println!(
                     "{kind}/{}/{n}: {:.1} % of nodes covered",
@@ -293,7 +300,7 @@ fn print_summary() {
             }
         }
     }
-    for kind in ["bgk", "psm"] {
+    for kind in ["bgk", "trt", "psm", "psm-trt"] {
         for prec in ["f64", "f32"] {
             for n in [256, 1024, 2048] {
                 for threads in THREADS {
@@ -329,6 +336,31 @@ fn print_summary() {
     }
     println!("(ceiling = best triad bandwidth at the same thread count / bytes per update; ratio = median MLUPS /");
     println!(" ceiling; 256² (9 MB of f64 buffers) fits in the 32 MB L3, so it may exceed the memory ceiling)");
+    println!();
+    println!("=== TRT node / BGK node (median time per step, same size, threads and execution variant) ===");
+    for (bgk, trt) in [("bgk", "trt"), ("psm", "psm-trt")] {
+        for prec in ["f64", "f32"] {
+            for n in [256, 1024, 2048] {
+                for threads in THREADS {
+                    for &variant in &variants {
+                        let (Some((tb, _)), Some((tt, _))) = (
+                            sample_times(&lattice_case(bgk, prec, n, threads, variant)),
+                            sample_times(&lattice_case(trt, prec, n, threads, variant)),
+                        ) else {
+                            continue;
+                        };
+                        println!(
+                            "{trt:<8} {prec:<4} {:>6} {threads:>2}t {:>9} {:>11}: {:.3}",
+                            format!("{n}²"),
+                            variant.0.name(),
+                            variant.1.name(),
+                            tt / tb
+                        );
+                    }
+                }
+            }
+        }
+    }
 }
 
 /// The 1-, 5- and 15-minute load averages, as `/proc/loadavg` gives them (empty where unavailable).
@@ -345,7 +377,9 @@ fn main() {
     let widest = (SimdLevel::detect(), Streaming::Aa);
     let two = (SimdLevel::detect(), Streaming::TwoLattice);
     bench_lattice::<f64>(&mut c, "bgk", &[256, 1024, 2048], widest);
+    bench_lattice::<f64>(&mut c, "trt", &[256, 1024, 2048], widest);
     bench_lattice::<f32>(&mut c, "bgk", &[256, 1024, 2048], widest);
+    bench_lattice::<f32>(&mut c, "trt", &[256, 1024, 2048], widest);
     bench_lattice::<f64>(&mut c, "bgk", &[2048], two);
     bench_lattice::<f32>(&mut c, "bgk", &[2048], two);
     if widest.0 != SimdLevel::Baseline {
@@ -353,7 +387,9 @@ fn main() {
         bench_lattice::<f32>(&mut c, "bgk", &[2048], (SimdLevel::Baseline, Streaming::Aa));
     }
     bench_lattice::<f64>(&mut c, "psm", &[1024], widest);
+    bench_lattice::<f64>(&mut c, "psm-trt", &[1024], widest);
     bench_lattice::<f32>(&mut c, "psm", &[1024], widest);
+    bench_lattice::<f32>(&mut c, "psm-trt", &[1024], widest);
     bench_lattice::<f64>(&mut c, "psm", &[1024], two);
     bench_lattice::<f32>(&mut c, "psm", &[1024], two);
     c.final_summary();

@@ -11,6 +11,10 @@
 //! * BGK (dissertation eq. 4.1): f_i ← f_i − (f_i − f_i^eq(ρ, u))/τ.
 //! * Guo, Zheng & Shi (2002) forcing with force density F: u = (Σ f_i c_i + F/2)/ρ and the source
 //!   S_i = (1 − 1/(2τ)) w_i [3 (c_i − u) + 9 (c_i·u) c_i]·F.
+//! * Two-relaxation-time collision (Ginzburg, Verhaeghe & d'Humières 2008, Commun. Comput. Phys. 3:427):
+//!   f_i^± = ½(f_i ± f_ī), e_i^± = ½(f_i^eq ± f_ī^eq), f_i ← f_i − (f_i⁺ − e_i⁺)/τ⁺ − (f_i⁻ − e_i⁻)/τ⁻ with
+//!   τ⁻ = ½ + Λ/(τ⁺ − ½); Guo's source split into its even and odd parts in c_i, each with its own prefactor:
+//!   S_i = (1 − 1/(2τ⁺)) ½(G_i + G_ī) + (1 − 1/(2τ⁻)) ½(G_i − G_ī), G_i = w_i [3 (c_i − u) + 9 (c_i·u) c_i]·F.
 //! * Noble–Torczynski PSM (dissertation eq. 4.4–4.8, `REFERENCE.md` §2):
 //!   f_i ← f_i − (1 − B)(f_i − f_i^eq(ρ,u))/τ + Σ_s B_s Ω_{i,s} + (1 − B) S_i with
 //!   Ω_{i,s} = f_ī − f_ī^eq(ρ,u) + f_i^eq(ρ,u_s) − f_i, B = B(min(Σ_s ε_s, 1)) shared as B_s = B ε_s / Σ ε,
@@ -138,6 +142,60 @@ pub fn bgk_forced(f: &Populations, tau: f64, force: [f64; 2]) -> Populations {
     out
 }
 
+/// The relaxation time τ⁻ = ½ + Λ/(τ⁺ − ½) of the antisymmetric parts for magic parameter Λ.
+pub fn tau_minus(tau_plus: f64, magic: f64) -> f64 {
+    0.5 + magic / (tau_plus - 0.5)
+}
+
+/// Two-relaxation-time collision, no body force (see the module notes).
+pub fn trt(f: &Populations, tau_plus: f64, magic: f64) -> Populations {
+    trt_forced(f, tau_plus, magic, [0.0, 0.0])
+}
+
+/// Two-relaxation-time collision with Guo's source split into even and odd parts, u with the half-force
+/// shift: f_i − (f_i⁺ − e_i⁺)/τ⁺ − (f_i⁻ − e_i⁻)/τ⁻ + (1 − 1/(2τ⁺)) G_i⁺ + (1 − 1/(2τ⁻)) G_i⁻.
+pub fn trt_forced(f: &Populations, tau_plus: f64, magic: f64, force: [f64; 2]) -> Populations {
+    let tau_m = tau_minus(tau_plus, magic);
+    let (rho, u) = macroscopic(f, force);
+    let feq = equilibrium(rho, u);
+    // Guo's source without its prefactor: G_i = w_i [3 (c_i − u) + 9 (c_i·u) c_i]·F.
+    let g: Populations = {
+        let mut g = [0.0; Q];
+        for (i, gi) in g.iter_mut().enumerate() {
+            let ci = c(i);
+            let cu = ci[0] * u[0] + ci[1] * u[1];
+            let ax = 3.0 * (ci[0] - u[0]) + 9.0 * cu * ci[0];
+            let ay = 3.0 * (ci[1] - u[1]) + 9.0 * cu * ci[1];
+            *gi = W[i] * (ax * force[0] + ay * force[1]);
+        }
+        g
+    };
+    let mut out = [0.0; Q];
+    for i in 0..Q {
+        let o = OPPOSITE[i];
+        let (f_plus, f_minus) = (0.5 * (f[i] + f[o]), 0.5 * (f[i] - f[o]));
+        let (e_plus, e_minus) = (0.5 * (feq[i] + feq[o]), 0.5 * (feq[i] - feq[o]));
+        let (g_plus, g_minus) = (0.5 * (g[i] + g[o]), 0.5 * (g[i] - g[o]));
+        out[i] = f[i] - (f_plus - e_plus) / tau_plus - (f_minus - e_minus) / tau_m
+            + (1.0 - 0.5 / tau_plus) * g_plus
+            + (1.0 - 0.5 / tau_m) * g_minus;
+    }
+    out
+}
+
+/// The fluid collision of a reference step: BGK (`magic` = `None`) or TRT with magic parameter Λ.
+pub fn fluid_collision(
+    f: &Populations,
+    tau: f64,
+    magic: Option<f64>,
+    force: [f64; 2],
+) -> Populations {
+    match magic {
+        None => bgk_forced(f, tau, force),
+        Some(m) => trt_forced(f, tau, m, force),
+    }
+}
+
 /// The PSM weighting function B(ε, τ).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Weighting {
@@ -206,18 +264,59 @@ pub fn psm_with_operator(
     force: [f64; 2],
     solids: &[Solid],
 ) -> (Populations, Vec<[f64; 2]>) {
+    psm_with_collision(f, tau, None, kind, op, force, solids)
+}
+
+/// As [`psm_with_operator`], with the fluid part relaxed by BGK (`magic` = `None`) or by TRT with magic
+/// parameter Λ: f_i + (1 − B)(C_i(f) − f_i) + Σ_s B_s Ω_{i,s}, C the fluid collision with its forcing. For TRT,
+/// Ω₂'s post-collision non-equilibrium (1 − 1/τ)(f_i − f_i^eq) becomes (1 − 1/τ⁺) n_i⁺ + (1 − 1/τ⁻) n_i⁻,
+/// n^± = f^± − e^±.
+pub fn psm_with_collision(
+    f: &Populations,
+    tau: f64,
+    magic: Option<f64>,
+    kind: Weighting,
+    op: SolidOp,
+    force: [f64; 2],
+    solids: &[Solid],
+) -> (Populations, Vec<[f64; 2]>) {
     let eps_sum: f64 = solids.iter().map(|s| s.fraction).sum();
     if eps_sum <= 0.0 {
-        return (bgk_forced(f, tau, force), vec![[0.0, 0.0]; solids.len()]);
+        return (
+            fluid_collision(f, tau, magic, force),
+            vec![[0.0, 0.0]; solids.len()],
+        );
     }
     let b = weighting(kind, eps_sum.min(1.0), tau);
     let (rho, u) = macroscopic(f, force);
     let feq = equilibrium(rho, u);
-    let s = guo_source(tau, u, force);
     let mut out = [0.0; Q];
-    for i in 0..Q {
-        out[i] = f[i] - (1.0 - b) * (f[i] - feq[i]) / tau + (1.0 - b) * s[i];
+    match magic {
+        None => {
+            let s = guo_source(tau, u, force);
+            for i in 0..Q {
+                out[i] = f[i] - (1.0 - b) * (f[i] - feq[i]) / tau + (1.0 - b) * s[i];
+            }
+        }
+        Some(m) => {
+            let fluid = trt_forced(f, tau, m, force);
+            for i in 0..Q {
+                out[i] = f[i] + (1.0 - b) * (fluid[i] - f[i]);
+            }
+        }
     }
+    // The fluid's post-collision non-equilibrium (Ω₂).
+    let post_non_equilibrium = |i: usize| -> f64 {
+        match magic {
+            None => (1.0 - 1.0 / tau) * (f[i] - feq[i]),
+            Some(m) => {
+                let o = OPPOSITE[i];
+                let n_plus = 0.5 * (f[i] + f[o]) - 0.5 * (feq[i] + feq[o]);
+                let n_minus = 0.5 * (f[i] - f[o]) - 0.5 * (feq[i] - feq[o]);
+                (1.0 - 1.0 / tau) * n_plus + (1.0 - 1.0 / tau_minus(tau, m)) * n_minus
+            }
+        }
+    };
     let mut exchange = Vec::with_capacity(solids.len());
     for solid in solids {
         let b_s = b * solid.fraction / eps_sum;
@@ -226,7 +325,7 @@ pub fn psm_with_operator(
         for i in 0..Q {
             let o = OPPOSITE[i];
             let omega_s = match op {
-                SolidOp::Superposition => feq_s[i] - f[i] + (1.0 - 1.0 / tau) * (f[i] - feq[i]),
+                SolidOp::Superposition => feq_s[i] - f[i] + post_non_equilibrium(i),
                 SolidOp::NonEquilibriumBounceBack => f[o] - feq[o] + feq_s[i] - f[i],
                 SolidOp::BounceBack => f[o] - feq_s[o] + feq_s[i] - f[i],
                 SolidOp::LinearizedBounceBack => {
@@ -434,6 +533,8 @@ pub struct Params {
     pub force: [f64; 2],
     /// PSM weighting for covered nodes.
     pub weighting: Weighting,
+    /// Fluid collision: BGK (`None`) or TRT with this magic parameter Λ.
+    pub magic: Option<f64>,
 }
 
 impl Lattice {
@@ -565,7 +666,7 @@ pub fn close_zou_he(before: &Lattice, streamed: &mut [Populations], sides: &Side
 }
 
 /// One reference step from the post-collision state `lat`: stream (push, with bounce-back), close the
-/// Zou–He nodes, collide (BGK or forced BGK; PSM at the `covered` nodes). Obstacle nodes end at the rest
+/// Zou–He nodes, collide (BGK or TRT, forced or not; PSM at the `covered` nodes). Obstacle nodes end at the rest
 /// equilibrium f^eq(1, 0) (the kernels' convention, so no garbage is ever stored). Returns the new state and,
 /// per entry of `covered`, the force on each of its solids (zero at obstacle nodes).
 ///
@@ -585,7 +686,7 @@ pub fn step(
         next.f[n] = if lat.solid[n] {
             equilibrium(1.0, [0.0, 0.0])
         } else {
-            bgk_forced(f, params.tau, params.force)
+            fluid_collision(f, params.tau, params.magic, params.force)
         };
     }
     let mut forces = Vec::with_capacity(covered.len());
@@ -594,10 +695,12 @@ pub fn step(
             forces.push(vec![[0.0, 0.0]; cov.solids.len()]);
             continue;
         }
-        let (f, ex) = psm(
+        let (f, ex) = psm_with_collision(
             &streamed[cov.node],
             params.tau,
+            params.magic,
             params.weighting,
+            SolidOp::NonEquilibriumBounceBack,
             params.force,
             &cov.solids,
         );

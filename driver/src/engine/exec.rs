@@ -2,10 +2,10 @@
 //! results.
 //!
 //! The workspace builds for the baseline x86-64 target (SSE2, two f64 lanes), so a binary runs on any x86-64
-//! machine. The bulk pass (pull streaming + BGK for every node, the loop that dominates a fluid step) is also
-//! compiled for AVX2 and for AVX-512: [`bulk_band_exec`] calls the kernel from a function carrying
-//! `#[target_feature]`, the kernel is inlined into it, and the compiler vectorises the loop with the wider
-//! registers. [`SimdLevel::detect`] picks the widest level the CPU has, at run time.
+//! machine. The bulk pass (pull streaming + the fluid collision, BGK or TRT, for every node: the loop that
+//! dominates a fluid step) is also compiled for AVX2 and for AVX-512: [`bulk_band_exec`] calls the kernel from
+//! a function carrying `#[target_feature]`, the kernel is inlined into it, and the compiler vectorises the loop
+//! with the wider registers. [`SimdLevel::detect`] picks the widest level the CPU has, at run time.
 //!
 //! Results are bitwise identical at every level: the kernels use only IEEE-754 correctly rounded operations
 //! (+, −, ×, ÷), Rust never fuses a·b + c into an FMA on its own (no fast-math flags), and the per-node
@@ -16,6 +16,7 @@
 //! made after checking that the CPU has the features. The same holds for the bulk pass of the in-place (AA)
 //! scheme, [`aa_bulk_exec`].
 use lbdem_kernels::fluid::aa::{aa_bulk_rows, AaStep};
+use lbdem_kernels::fluid::collide::Collision;
 use lbdem_kernels::fluid::d2q9::Q;
 use lbdem_kernels::fluid::lattice::LatticeShape;
 use lbdem_kernels::fluid::step::{bulk_band, FluidParams};
@@ -185,6 +186,7 @@ impl Exec {
 
 /// The bulk pass of rows `y0..y1` ([`bulk_band`]) into the band `dst`, compiled for `simd`. Falls back to
 /// the baseline level if `simd` is not available on this CPU.
+#[allow(clippy::too_many_arguments)]
 pub fn bulk_band_exec<T: Real>(
     simd: SimdLevel,
     shape: &LatticeShape,
@@ -193,22 +195,23 @@ pub fn bulk_band_exec<T: Real>(
     y0: usize,
     y1: usize,
     params: &FluidParams<T>,
+    collision: &Collision<T>,
 ) {
     #[cfg(target_arch = "x86_64")]
     {
         if simd == SimdLevel::Avx512 && SimdLevel::Avx512.available() {
             // SAFETY: the CPU has AVX-512 F/VL/DQ/BW (checked just above).
-            unsafe { x86::bulk_avx512(shape, src, dst, y0, y1, params) };
+            unsafe { x86::bulk_avx512(shape, src, dst, y0, y1, params, collision) };
             return;
         }
         if simd == SimdLevel::Avx2 && SimdLevel::Avx2.available() {
             // SAFETY: the CPU has AVX2 (checked just above).
-            unsafe { x86::bulk_avx2(shape, src, dst, y0, y1, params) };
+            unsafe { x86::bulk_avx2(shape, src, dst, y0, y1, params, collision) };
             return;
         }
     }
     let _ = simd;
-    bulk_band(shape, src, dst, y0, y1, params);
+    bulk_band(shape, src, dst, y0, y1, params, collision);
 }
 
 /// The bulk pass of one in-place (AA) step over a band of rows ([`aa_bulk_rows`]), compiled for `simd`.
@@ -218,22 +221,23 @@ pub fn aa_bulk_exec<T: Real>(
     rows: &mut [[&mut [T]; Q]],
     step: AaStep,
     params: &FluidParams<T>,
+    collision: &Collision<T>,
 ) {
     #[cfg(target_arch = "x86_64")]
     {
         if simd == SimdLevel::Avx512 && SimdLevel::Avx512.available() {
             // SAFETY: the CPU has AVX-512 F/VL/DQ/BW (checked just above).
-            unsafe { x86::aa_avx512(rows, step, params) };
+            unsafe { x86::aa_avx512(rows, step, params, collision) };
             return;
         }
         if simd == SimdLevel::Avx2 && SimdLevel::Avx2.available() {
             // SAFETY: the CPU has AVX2 (checked just above).
-            unsafe { x86::aa_avx2(rows, step, params) };
+            unsafe { x86::aa_avx2(rows, step, params, collision) };
             return;
         }
     }
     let _ = simd;
-    aa_bulk_rows(rows, step, params);
+    aa_bulk_rows(rows, step, params, collision);
 }
 
 #[cfg(target_arch = "x86_64")]
@@ -246,8 +250,9 @@ mod x86 {
         rows: &mut [[&mut [T]; Q]],
         step: AaStep,
         params: &FluidParams<T>,
+        collision: &Collision<T>,
     ) {
-        aa_bulk_rows(rows, step, params);
+        aa_bulk_rows(rows, step, params, collision);
     }
 
     /// [`aa_bulk_rows`] compiled for AVX-512.
@@ -256,8 +261,9 @@ mod x86 {
         rows: &mut [[&mut [T]; Q]],
         step: AaStep,
         params: &FluidParams<T>,
+        collision: &Collision<T>,
     ) {
-        aa_bulk_rows(rows, step, params);
+        aa_bulk_rows(rows, step, params, collision);
     }
 
     /// [`bulk_band`] compiled for AVX2.
@@ -269,8 +275,9 @@ mod x86 {
         y0: usize,
         y1: usize,
         params: &FluidParams<T>,
+        collision: &Collision<T>,
     ) {
-        bulk_band(shape, src, dst, y0, y1, params);
+        bulk_band(shape, src, dst, y0, y1, params, collision);
     }
 
     /// [`bulk_band`] compiled for AVX-512.
@@ -282,8 +289,9 @@ mod x86 {
         y0: usize,
         y1: usize,
         params: &FluidParams<T>,
+        collision: &Collision<T>,
     ) {
-        bulk_band(shape, src, dst, y0, y1, params);
+        bulk_band(shape, src, dst, y0, y1, params, collision);
     }
 }
 

@@ -14,7 +14,9 @@ use lbdem_kernels::fluid::aa::{
     Layout,
 };
 use lbdem_kernels::fluid::boundary::{Boundaries, SideCondition};
-use lbdem_kernels::fluid::collide::{psm_collide, PsmParams, SolidOperator, SolidShare, Weighting};
+use lbdem_kernels::fluid::collide::{
+    psm_collide, Collision, PsmParams, SolidOperator, SolidShare, Weighting,
+};
 use lbdem_kernels::fluid::d2q9::{equilibrium, OPPOSITE, Q};
 use lbdem_kernels::fluid::lattice::{LatticeShape, Side};
 use lbdem_kernels::fluid::step::{
@@ -84,6 +86,8 @@ pub struct FluidLattice<T: Real> {
     coverage: Option<Coverage<T>>,
     cover_scratch: CoverScratch,
     solid_operator: SolidOperator,
+    /// The fluid collision (BGK unless [`FluidLattice::set_collision`] chose TRT).
+    collision: Collision<T>,
     simd: SimdLevel,
     streaming: Streaming,
     /// Layout of the current buffer (always [`Layout::Collided`] with the two-lattice scheme).
@@ -244,6 +248,7 @@ impl<T: Real> FluidLattice<T> {
             coverage: None,
             cover_scratch: CoverScratch::default(),
             solid_operator: SolidOperator::default(),
+            collision: Collision::Bgk,
             simd: SimdLevel::detect(),
             streaming,
             layout: Layout::Collided,
@@ -273,6 +278,35 @@ impl<T: Real> FluidLattice<T> {
     /// Node flags.
     pub fn flags(&self) -> &[u8] {
         &self.flags
+    }
+
+    /// The fluid collision operator (BGK unless [`FluidLattice::set_collision`] chose TRT).
+    pub fn collision(&self) -> Collision<T> {
+        self.collision
+    }
+
+    /// Choose the fluid collision operator: BGK (the default) or two-relaxation-time with magic parameter Λ
+    /// (see [`Collision`]). The same operator relaxes the fluid part of partially covered nodes. Refused, with
+    /// the lattice unchanged, when τ⁻ = ½ + Λ/(τ − ½) is not finite and above ½ (a [`lbdem_kernels::fluid::
+    /// collide::Trt`] already has Λ > 0).
+    pub fn set_collision(&mut self, collision: Collision<T>) -> Result<()> {
+        collision.rates(self.params.tau).map_err(|e| {
+            let magic = match collision {
+                Collision::Trt(t) => t.magic().to_f64_exact(),
+                Collision::Bgk => f64::NAN,
+            };
+            LbdemError::field(
+                "fluid.magic",
+                magic,
+                &format!("gives no usable two-relaxation-time rates with tau = {} ({e:?})", {
+                    self.params.tau.to_f64_exact()
+                }),
+                "use a magic parameter Lambda > 0 such that tau_minus = 1/2 + Lambda/(tau - 1/2) is finite \
+                 (3/16 is the default)",
+            )
+        })?;
+        self.collision = collision;
+        Ok(())
     }
 
     /// Steps taken so far.
@@ -673,6 +707,7 @@ impl<T: Real> FluidLattice<T> {
         let nx = shape.nx;
         let periodic = self.bc.periodic_axes();
         let (params, simd, band_rows) = (self.params, self.simd, self.band_rows);
+        let collision = self.collision;
         let layout = self.layout;
         let after = layout.next();
         let kind = AaStep::from(layout);
@@ -690,6 +725,7 @@ impl<T: Real> FluidLattice<T> {
             weighting: c.weighting,
             force: params.force,
             solid: self.solid_operator,
+            collision: self.collision,
         });
         let (covered, offsets, shares, exchange): (&[u32], &[u32], &[SolidShare<T>], _) =
             match &mut self.coverage {
@@ -730,7 +766,9 @@ impl<T: Real> FluidLattice<T> {
                 .zip(special_vals.par_chunks_mut(SPECIAL_CHUNK))
                 .for_each(|(nodes, vals)| {
                     for (&n, v) in nodes.iter().zip(vals.iter_mut()) {
-                        *v = special_node_value(&domain, buf, layout, &params, n as usize);
+                        *v = special_node_value(
+                            &domain, buf, layout, &params, &collision, n as usize,
+                        );
                     }
                 });
             if let Some(psm) = &psm {
@@ -781,7 +819,7 @@ impl<T: Real> FluidLattice<T> {
                             *v = Some(f);
                         }
                     }
-                    aa_bulk_exec(simd, band, kind, &params);
+                    aa_bulk_exec(simd, band, kind, &params, &collision);
                     for (k, v) in (*lo..*hi).zip(vals.iter()).filter(|(k, _)| own(*k)) {
                         if let Some(f) = v {
                             let n = covered[k] as usize;
@@ -836,6 +874,7 @@ impl<T: Real> FluidLattice<T> {
             flags: &self.flags,
         };
         let params = self.params;
+        let collision = self.collision;
         let special = &self.special;
         let band_rows = self.band_rows;
         let simd = self.simd;
@@ -897,13 +936,14 @@ impl<T: Real> FluidLattice<T> {
             weighting: c.3,
             force: params.force,
             solid: self.solid_operator,
+            collision: self.collision,
         });
         work.into_par_iter()
             .for_each(|(y0, mut band, (lo, hi), exchange)| {
                 let y1 = (y0 + band_rows).min(shape.ny);
                 let sp = nodes_in_rows(&shape, special, y0, y1);
-                bulk_band_exec(simd, &shape, src, &mut band, y0, y1, &params);
-                fix_special_nodes(&domain, src, &mut band, y0, &params, sp);
+                bulk_band_exec(simd, &shape, src, &mut band, y0, y1, &params, &collision);
+                fix_special_nodes(&domain, src, &mut band, y0, &params, &collision, sp);
                 if let (Some((nodes, offsets, shares, _)), Some(psm)) = (cov, psm.as_ref()) {
                     if hi > lo {
                         let covered = CoveredNodes {

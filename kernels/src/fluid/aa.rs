@@ -26,7 +26,7 @@
 //! non-periodic sides, next to obstacles, solid or covered by moving solids are computed separately by the
 //! caller from the untouched buffer *before* the bulk pass and stored *after* it at the places
 //! [`post_collision_offset`] gives (the bulk pass writes garbage only into places that belong to such nodes).
-use super::collide::{bgk_collide, bgk_collide_forced};
+use super::collide::{bgk_collide, bgk_collide_forced, trt_collide, trt_collide_forced, Collision};
 use super::d2q9::{OPPOSITE, Q, VELOCITIES};
 use super::lattice::{LatticeShape, Neighbour};
 use super::step::{FluidParams, SOLID};
@@ -329,18 +329,35 @@ pub fn store_in_rows<T: Real>(
 }
 
 /// The bulk pass of one AA step over a band of rows (each entry as [`plane_row`] describes), with the fluid's
-/// collision (BGK, or BGK with Guo forcing when a force is set). Inlined into its caller, so a caller compiled
+/// collision (BGK or TRT, with Guo forcing when a force is set). Inlined into its caller, so a caller compiled
 /// with wider vector instructions (`#[target_feature]`) gets the loops in those instructions.
 #[inline(always)]
-pub fn aa_bulk_rows<T: Real>(rows: &mut [[&mut [T]; Q]], step: AaStep, params: &FluidParams<T>) {
-    let omega = T::one() / params.tau;
-    if params.forced() {
-        let force = params.force;
-        let c = |f: &mut [T; Q]| bgk_collide_forced(f, omega, force);
-        aa_rows_with(rows, step, &c);
-    } else {
-        let c = |f: &mut [T; Q]| bgk_collide(f, omega);
-        aa_rows_with(rows, step, &c);
+pub fn aa_bulk_rows<T: Real>(
+    rows: &mut [[&mut [T]; Q]],
+    step: AaStep,
+    params: &FluidParams<T>,
+    collision: &Collision<T>,
+) {
+    let rates = collision.rates_unchecked(params.tau);
+    let omega = rates.plus;
+    let force = params.force;
+    match (collision, params.forced()) {
+        (Collision::Bgk, true) => {
+            let c = |f: &mut [T; Q]| bgk_collide_forced(f, omega, force);
+            aa_rows_with(rows, step, &c);
+        }
+        (Collision::Bgk, false) => {
+            let c = |f: &mut [T; Q]| bgk_collide(f, omega);
+            aa_rows_with(rows, step, &c);
+        }
+        (Collision::Trt(_), true) => {
+            let c = |f: &mut [T; Q]| trt_collide_forced(f, rates, force);
+            aa_rows_with(rows, step, &c);
+        }
+        (Collision::Trt(_), false) => {
+            let c = |f: &mut [T; Q]| trt_collide(f, rates);
+            aa_rows_with(rows, step, &c);
+        }
     }
 }
 

@@ -87,6 +87,218 @@ pub fn weighting<T: Real>(kind: Weighting, eps: T, tau: T) -> T {
     }
 }
 
+/// The collision operator of the fluid: BGK (one relaxation time) or Ginzburg's two-relaxation-time operator.
+///
+/// **TRT** (Ginzburg, Verhaeghe & d'Humières 2008, Commun. Comput. Phys. 3:427; Ginzburg, d'Humières &
+/// Kuzmin 2010): each pair of opposite populations is split into its symmetric and antisymmetric parts,
+/// f_i^± = ½(f_i ± f_ī), e_i^± = ½(f_i^eq ± f_ī^eq), and the parts relax at their own rates:
+/// f_i ← f_i − ω⁺(f_i⁺ − e_i⁺) − ω⁻(f_i⁻ − e_i⁻), ω^± = 1/τ^±. τ⁺ sets the viscosity, ν = (τ⁺ − ½)/3; τ⁻
+/// follows from the "magic" parameter Λ = (τ⁺ − ½)(τ⁻ − ½). Steady solutions (with bounce-back walls) depend on
+/// τ⁺ and τ⁻ only through ν and Λ, so at fixed Λ the wall location and the permeability are the same at every
+/// viscosity; Λ = 3/16 puts the half-way bounce-back wall of a Poiseuille channel exactly half-way. With
+/// Λ = (τ − ½)², τ⁻ = τ⁺ and the operator is BGK (to roundoff).
+///
+/// Guo forcing splits the same way: S_i = (1 − ω⁺/2) S_i⁺ + (1 − ω⁻/2) S_i⁻ with S_i⁻ = 3 w_i c_i·F and
+/// S_i⁺ = w_i [9 (c_i·u)(c_i·F) − 3 u·F] (the odd and even parts of Guo's w_i [3 (c_i − u) + 9 (c_i·u) c_i]·F),
+/// and u = (Σ f c + F/2)/ρ. S⁺ carries no mass and S⁻ exactly F of momentum, so the step adds F whatever ω^±.
+#[derive(Clone, Copy, Debug, PartialEq, Default)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(rename_all = "snake_case"))]
+pub enum Collision<T> {
+    /// Bhatnagar–Gross–Krook, one relaxation time τ (dissertation eq. 4.1).
+    #[default]
+    Bgk,
+    /// Two relaxation times with the magic parameter of [`Trt`].
+    Trt(Trt<T>),
+}
+
+/// The magic parameter Λ of a two-relaxation-time collision, checked positive and finite by [`Trt::new`].
+///
+/// Deserialised values are not checked: pass them through [`Collision::rates`] (the driver's `set_collision`
+/// does) before use.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct Trt<T> {
+    magic: T,
+}
+
+/// Why a collision operator was refused.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum CollisionError {
+    /// τ (τ⁺) is not finite or not above ½.
+    Tau,
+    /// Λ is not finite or not positive.
+    Magic,
+    /// τ⁻ = ½ + Λ/(τ⁺ − ½) is not finite or not above ½ (Λ too small or too large for this τ⁺).
+    TauMinus,
+}
+
+impl<T: Real> Trt<T> {
+    /// Λ = 3/16: half-way bounce-back walls exactly half-way for Poiseuille flow (the default).
+    pub const DEFAULT_MAGIC: f64 = 3.0 / 16.0;
+
+    /// TRT with magic parameter `magic` = Λ; refuses Λ ≤ 0 and non-finite Λ.
+    pub fn new(magic: T) -> Result<Self, CollisionError> {
+        if magic.is_finite() && magic > T::zero() {
+            Ok(Self { magic })
+        } else {
+            Err(CollisionError::Magic)
+        }
+    }
+
+    /// The magic parameter Λ.
+    #[inline(always)]
+    pub fn magic(&self) -> T {
+        self.magic
+    }
+
+    /// τ⁻ = ½ + Λ/(τ⁺ − ½).
+    #[inline(always)]
+    pub fn tau_minus(&self, tau_plus: T) -> T {
+        T::lit(0.5) + self.magic / (tau_plus - T::lit(0.5))
+    }
+}
+
+impl<T: Real> Default for Trt<T> {
+    fn default() -> Self {
+        Self {
+            magic: T::lit(Self::DEFAULT_MAGIC),
+        }
+    }
+}
+
+/// The relaxation rates of a collision: ω⁺ = 1/τ⁺ for the symmetric parts, ω⁻ = 1/τ⁻ for the antisymmetric
+/// ones (BGK: both 1/τ). Built by [`Collision::rates`] (checked) or [`Collision::rates_unchecked`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Rates<T> {
+    /// ω⁺ = 1/τ⁺.
+    pub plus: T,
+    /// ω⁻ = 1/τ⁻.
+    pub minus: T,
+}
+
+impl<T: Real> Collision<T> {
+    /// Check the operator with relaxation time `tau` (τ⁺) and return its rates: refuses τ ≤ ½, and for TRT a
+    /// τ⁻ that is not finite and above ½.
+    pub fn rates(&self, tau: T) -> Result<Rates<T>, CollisionError> {
+        if !(tau.is_finite() && tau > T::lit(0.5)) {
+            return Err(CollisionError::Tau);
+        }
+        if let Collision::Trt(t) = self {
+            if !(t.magic.is_finite() && t.magic > T::zero()) {
+                return Err(CollisionError::Magic);
+            }
+            let tm = t.tau_minus(tau);
+            if !(tm.is_finite() && tm > T::lit(0.5)) {
+                return Err(CollisionError::TauMinus);
+            }
+        }
+        Ok(self.rates_unchecked(tau))
+    }
+
+    /// The rates without checks (the step passes call this once per pass; the driver checked the operator with
+    /// [`Collision::rates`] when it was chosen). The same arithmetic as [`Collision::rates`], so the same bits.
+    #[inline(always)]
+    pub fn rates_unchecked(&self, tau: T) -> Rates<T> {
+        let plus = T::one() / tau;
+        match self {
+            Collision::Bgk => Rates { plus, minus: plus },
+            Collision::Trt(t) => Rates {
+                plus,
+                minus: T::one() / t.tau_minus(tau),
+            },
+        }
+    }
+}
+
+/// Two-relaxation-time collision of one node, in place, without body force. Conserves mass and momentum to
+/// roundoff; with `rates.minus == rates.plus` it is BGK to roundoff.
+#[inline(always)]
+pub fn trt_collide<T: Real>(f: &mut [T; Q], rates: Rates<T>) {
+    let rho = density(f);
+    let j = momentum(f);
+    let inv = T::one() / rho;
+    trt_relax(f, rho, [j[0] * inv, j[1] * inv], rates, None);
+}
+
+/// Two-relaxation-time collision of one node with Guo forcing split into its even and odd parts (force density
+/// `force`, lattice units): adds exactly `force` of momentum and no mass.
+#[inline(always)]
+pub fn trt_collide_forced<T: Real>(f: &mut [T; Q], rates: Rates<T>, force: [T; 2]) {
+    let (rho, u) = macroscopic(f, force);
+    trt_relax(f, rho, u, rates, Some(force));
+}
+
+/// The TRT relaxation (and forcing) of `f` towards the equilibrium of (ρ, u), pair by pair: with
+/// n^± = f^± − e^±, f_i ← f_i − ω⁺ n⁺ − ω⁻ n⁻ and f_ī ← f_ī − ω⁺ n⁺ + ω⁻ n⁻, written as
+/// f_i − (A + B), f_ī − (A − B) with A = (ω⁺/2)(f_i + f_ī) − ω⁺ e⁺ and B = (ω⁻/2)(f_i − f_ī) − ω⁻ e⁻.
+#[inline(always)]
+fn trt_relax<T: Real>(f: &mut [T; Q], rho: T, u: [T; 2], rates: Rates<T>, force: Option<[T; 2]>) {
+    let w = weights::<T>();
+    let one = T::one();
+    let half = T::lit(0.5);
+    let three = T::lit(3.0);
+    let four_half = T::lit(4.5);
+    let [ux, uy] = u;
+    let usq = T::lit(1.5) * (ux * ux + uy * uy);
+    let (hp, hm) = (half * rates.plus, half * rates.minus);
+    // ω⁺ w ρ and 3 ω⁻ w ρ for the axis and diagonal weights.
+    let (p1, p5) = (rates.plus * (w[1] * rho), rates.plus * (w[5] * rho));
+    let (m1, m5) = (
+        three * (rates.minus * (w[1] * rho)),
+        three * (rates.minus * (w[5] * rho)),
+    );
+    // Forcing: (1 − ω⁺/2) w [9 (c·u)(c·F) − 3 u·F] and (1 − ω⁻/2) 3 w c·F, per weight.
+    let (sp, sm, uf) = match force {
+        Some(fc) => (
+            one - hp,
+            one - hm,
+            Some((fc, three * (ux * fc[0] + uy * fc[1]))),
+        ),
+        None => (T::zero(), T::zero(), None),
+    };
+    let pair = |fi: T, fo: T, p: T, m: T, wi: T, cu: T, cf: T| -> (T, T) {
+        let a = hp * (fi + fo) - p * ((one + four_half * cu * cu) - usq);
+        let b = hm * (fi - fo) - m * cu;
+        let (mut gi, mut go) = (fi - (a + b), fo - (a - b));
+        if let Some((_, uf3)) = uf {
+            let even = sp * (wi * (T::lit(9.0) * cu * cf - uf3));
+            let odd = sm * (wi * (three * cf));
+            gi += even + odd;
+            go += even - odd;
+        }
+        (gi, go)
+    };
+    let fc = uf.map(|(fc, _)| fc).unwrap_or([T::zero(); 2]);
+    let (f1, f3) = pair(f[1], f[3], p1, m1, w[1], ux, fc[0]);
+    let (f2, f4) = pair(f[2], f[4], p1, m1, w[1], uy, fc[1]);
+    let (f5, f7) = pair(f[5], f[7], p5, m5, w[5], ux + uy, fc[0] + fc[1]);
+    let (f8, f6) = pair(f[8], f[6], p5, m5, w[5], ux - uy, fc[0] - fc[1]);
+    let mut f0 = f[0] - rates.plus * (f[0] - w[0] * rho * (one - usq));
+    if let Some((_, uf3)) = uf {
+        f0 -= sp * (w[0] * uf3);
+    }
+    *f = [f0, f1, f2, f3, f4, f5, f6, f7, f8];
+}
+
+/// The fluid collision of one node chosen by `collision` with rates `rates` (from [`Collision::rates`]), with
+/// Guo forcing when `force` is not zero. BGK is the BGK path bitwise ([`bgk_collide`] / [`bgk_collide_forced`]).
+#[inline(always)]
+pub fn fluid_collide<T: Real>(
+    f: &mut [T; Q],
+    collision: &Collision<T>,
+    rates: Rates<T>,
+    force: [T; 2],
+) {
+    let forced = force[0] != T::zero() || force[1] != T::zero();
+    match (collision, forced) {
+        (Collision::Bgk, false) => bgk_collide(f, rates.plus),
+        (Collision::Bgk, true) => bgk_collide_forced(f, rates.plus, force),
+        (Collision::Trt(_), false) => trt_collide(f, rates),
+        (Collision::Trt(_), true) => trt_collide_forced(f, rates, force),
+    }
+}
+
 /// Fluid density and velocity at a node with the Guo half-force shift: u = (Σ f c + F/2)/ρ.
 #[inline(always)]
 pub fn macroscopic<T: Real>(f: &[T; Q], force: [T; 2]) -> (T, [T; 2]) {
@@ -195,6 +407,8 @@ pub struct PsmParams<T> {
     pub solid: SolidOperator,
     /// Body-force density applied to the fluid (weighted by 1 − B at covered nodes).
     pub force: [T; 2],
+    /// The fluid collision (BGK or TRT) of the fluid part, (1 − B) of the update.
+    pub collision: Collision<T>,
 }
 
 /// Noble–Torczynski partially-saturated collision of one node, in place.
@@ -211,7 +425,8 @@ pub fn psm_collide<T: Real>(
     shares: &[SolidShare<T>],
     exchange: &mut [[T; 2]],
 ) -> T {
-    let omega = T::one() / params.tau;
+    let rates = params.collision.rates_unchecked(params.tau);
+    let omega = rates.plus;
     let forced = params.force[0] != T::zero() || params.force[1] != T::zero();
     let mut eps_sum = T::zero();
     for s in shares {
@@ -222,11 +437,7 @@ pub fn psm_collide<T: Real>(
         for e in exchange.iter_mut().take(shares.len()) {
             *e = [T::zero(); 2];
         }
-        if forced {
-            bgk_collide_forced(f, omega, params.force);
-        } else {
-            bgk_collide(f, omega);
-        }
+        fluid_collide(f, &params.collision, rates, params.force);
         return T::zero();
     }
     let eps = if eps_sum > T::one() {
@@ -254,12 +465,25 @@ pub fn psm_collide<T: Real>(
                 common[i] = (f[o] - feq[o]) - f[i];
             }
         }
-        SolidOperator::Superposition => {
-            let keep = T::one() - omega;
-            for i in 0..Q {
-                common[i] = keep * (f[i] - feq[i]) - f[i];
+        SolidOperator::Superposition => match params.collision {
+            Collision::Bgk => {
+                let keep = T::one() - omega;
+                for i in 0..Q {
+                    common[i] = keep * (f[i] - feq[i]) - f[i];
+                }
             }
-        }
+            Collision::Trt(_) => {
+                // The fluid's post-collision non-equilibrium, (1 − ω⁺) n⁺ + (1 − ω⁻) n⁻.
+                let (kp, km) = (T::one() - rates.plus, T::one() - rates.minus);
+                let half = T::lit(0.5);
+                for i in 0..Q {
+                    let o = OPPOSITE[i];
+                    let np = half * ((f[i] + f[o]) - (feq[i] + feq[o]));
+                    let nm = half * ((f[i] - f[o]) - (feq[i] - feq[o]));
+                    common[i] = (kp * np + km * nm) - f[i];
+                }
+            }
+        },
         SolidOperator::BounceBack => {
             for i in 0..Q {
                 common[i] = f[OPPOSITE[i]] - f[i];
@@ -280,13 +504,24 @@ pub fn psm_collide<T: Real>(
     let w_lin = weights::<T>();
     let one_minus_b = T::one() - b_total;
     let mut post = [T::zero(); Q];
-    for i in 0..Q {
-        post[i] = f[i] - one_minus_b * omega * (f[i] - feq[i]);
-    }
-    if forced {
-        let s = guo_source(omega, u, params.force);
-        for i in 0..Q {
-            post[i] += one_minus_b * s[i];
+    match params.collision {
+        Collision::Bgk => {
+            for i in 0..Q {
+                post[i] = f[i] - one_minus_b * omega * (f[i] - feq[i]);
+            }
+            if forced {
+                let s = guo_source(omega, u, params.force);
+                for i in 0..Q {
+                    post[i] += one_minus_b * s[i];
+                }
+            }
+        }
+        Collision::Trt(_) => {
+            let mut g = *f;
+            trt_relax(&mut g, rho, u, rates, forced.then_some(params.force));
+            for i in 0..Q {
+                post[i] = f[i] + one_minus_b * (g[i] - f[i]);
+            }
         }
     }
     for (share, ex) in shares.iter().zip(exchange.iter_mut()) {

@@ -21,7 +21,10 @@
 //! lattice into bands for threads gives bitwise the same result for any number of threads.
 use super::aa::{load_post_collision, Layout};
 use super::boundary::{zou_he, zou_he_corner, Boundaries, SideCondition};
-use super::collide::{bgk_collide, bgk_collide_forced, psm_collide, PsmParams, SolidShare};
+use super::collide::{
+    bgk_collide, bgk_collide_forced, fluid_collide, psm_collide, trt_collide, trt_collide_forced,
+    Collision, PsmParams, SolidShare,
+};
 use super::d2q9::{density, equilibrium, OPPOSITE, Q, VELOCITIES};
 use super::lattice::{wrap_row, LatticeShape, Neighbour, Side};
 use crate::Real;
@@ -440,14 +443,15 @@ impl<T: Real> FluidParams<T> {
 }
 
 /// The new post-collision populations of special node `n` (see [`classify_special_nodes`]) from `src` in
-/// `layout`: the general gather and BGK collision, or the rest equilibrium (ρ = 1, u = 0) for a solid obstacle
-/// node.
+/// `layout`: the general gather and the fluid collision `collision`, or the rest equilibrium (ρ = 1, u = 0) for a
+/// solid obstacle node.
 #[inline]
 pub fn special_node_value<T: Real>(
     domain: &Domain<'_, T>,
     src: &[T],
     layout: Layout,
     params: &FluidParams<T>,
+    collision: &Collision<T>,
     n: usize,
 ) -> [T; Q] {
     let (shape, bc, flags) = (&domain.shape, &domain.bc, domain.flags);
@@ -456,29 +460,30 @@ pub fn special_node_value<T: Real>(
     }
     let (x, y) = shape.coords(n);
     let mut f = gather_node_in(shape, src, layout, bc, flags, x, y);
-    let omega = T::one() / params.tau;
-    if params.forced() {
-        bgk_collide_forced(&mut f, omega, params.force);
-    } else {
-        bgk_collide(&mut f, omega);
-    }
+    fluid_collide(
+        &mut f,
+        collision,
+        collision.rates_unchecked(params.tau),
+        params.force,
+    );
     f
 }
 
 /// Redo the special nodes listed in `special` (sorted, all within rows y0..y1) with the general gather and
-/// BGK collision; solid obstacle nodes are set to the rest equilibrium (ρ = 1, u = 0).
+/// the fluid collision; solid obstacle nodes are set to the rest equilibrium (ρ = 1, u = 0).
 pub fn fix_special_nodes<T: Real>(
     domain: &Domain<'_, T>,
     src: &[T],
     dst: &mut [&mut [T]; Q],
     y0: usize,
     params: &FluidParams<T>,
+    collision: &Collision<T>,
     special: &[u32],
 ) {
     let base = y0 * domain.shape.nx;
     for &node in special {
         let n = node as usize;
-        let f = special_node_value(domain, src, Layout::Collided, params, n);
+        let f = special_node_value(domain, src, Layout::Collided, params, collision, n);
         for q in 0..Q {
             dst[q][n - base] = f[q];
         }
@@ -551,9 +556,10 @@ pub fn collide_covered_nodes<T: Real>(
     }
 }
 
-/// The bulk pass of a band with the fluid's collision (BGK, or BGK with Guo forcing when a force is set):
-/// [`bulk_rows`] with the collision chosen from `params`. Inlined into its caller, so a caller compiled
-/// with wider vector instructions (`#[target_feature]`) gets the whole loop in those instructions.
+/// The bulk pass of a band with the fluid's collision (BGK or TRT, with Guo forcing when a force is set):
+/// [`bulk_rows`] with the collision chosen from `params` and `collision`. Each of the four variants is its own
+/// branch-free loop. Inlined into its caller, so a caller compiled with wider vector instructions
+/// (`#[target_feature]`) gets the whole loop in those instructions.
 #[inline(always)]
 pub fn bulk_band<T: Real>(
     shape: &LatticeShape,
@@ -562,22 +568,30 @@ pub fn bulk_band<T: Real>(
     y0: usize,
     y1: usize,
     params: &FluidParams<T>,
+    collision: &Collision<T>,
 ) {
-    let omega = T::one() / params.tau;
-    if params.forced() {
-        let force = params.force;
-        bulk_rows(shape, src, dst, y0, y1, |f: &mut [T; Q]| {
+    let rates = collision.rates_unchecked(params.tau);
+    let omega = rates.plus;
+    let force = params.force;
+    match (collision, params.forced()) {
+        (Collision::Bgk, true) => bulk_rows(shape, src, dst, y0, y1, |f: &mut [T; Q]| {
             bgk_collide_forced(f, omega, force)
-        });
-    } else {
-        bulk_rows(shape, src, dst, y0, y1, |f: &mut [T; Q]| {
+        }),
+        (Collision::Bgk, false) => bulk_rows(shape, src, dst, y0, y1, |f: &mut [T; Q]| {
             bgk_collide(f, omega)
-        });
+        }),
+        (Collision::Trt(_), true) => bulk_rows(shape, src, dst, y0, y1, |f: &mut [T; Q]| {
+            trt_collide_forced(f, rates, force)
+        }),
+        (Collision::Trt(_), false) => bulk_rows(shape, src, dst, y0, y1, |f: &mut [T; Q]| {
+            trt_collide(f, rates)
+        }),
     }
 }
 
 /// One complete update of the rows y0..y1 (bulk, special nodes, covered nodes), for a lattice without moving
 /// solids. `special` must be the part of the [`classify_special_nodes`] list that lies in the band.
+#[allow(clippy::too_many_arguments)]
 pub fn step_band<T: Real>(
     domain: &Domain<'_, T>,
     src: &[T],
@@ -585,10 +599,11 @@ pub fn step_band<T: Real>(
     y0: usize,
     y1: usize,
     params: &FluidParams<T>,
+    collision: &Collision<T>,
     special: &[u32],
 ) {
-    bulk_band(&domain.shape, src, dst, y0, y1, params);
-    fix_special_nodes(domain, src, dst, y0, params, special);
+    bulk_band(&domain.shape, src, dst, y0, y1, params, collision);
+    fix_special_nodes(domain, src, dst, y0, params, collision, special);
 }
 
 /// The sub-slice of a sorted node list lying in rows y0..y1.

@@ -12,7 +12,7 @@ use lbdem_kernels::fluid::aa::{
     local_row, plane_row, post_collision_offset, scatter_row, AaStep, Layout,
 };
 use lbdem_kernels::fluid::boundary::{Boundaries, SideCondition};
-use lbdem_kernels::fluid::collide::{PsmParams, SolidOperator, SolidShare, Weighting};
+use lbdem_kernels::fluid::collide::{Collision, PsmParams, SolidOperator, SolidShare, Weighting};
 use lbdem_kernels::fluid::d2q9::equilibrium;
 use lbdem_kernels::fluid::d2q9::{OPPOSITE, Q, VELOCITIES};
 use lbdem_kernels::fluid::lattice::{LatticeShape, Neighbour, ShapeError, Side};
@@ -418,12 +418,22 @@ pub fn fix_passes_in_bounds(c: &mut dyn Chooser, max: usize) {
         weighting: Weighting::NobleTorczynski,
         force: [1e-4, 0.0],
         solid: SolidOperator::NonEquilibriumBounceBack,
+        collision: Collision::Bgk,
     };
     let mut dst = vec![f64::NAN; shape.buffer_len()];
     for (y0, y1) in [(0, ym), (ym, ny)] {
         let mut band = band_mut(&shape, planes_mut(&shape, &mut dst), y0, y1);
         let in_band = nodes_in_rows(&shape, &special, y0, y1);
-        step_band(&domain, &src, &mut band, y0, y1, &fluid, in_band);
+        step_band(
+            &domain,
+            &src,
+            &mut band,
+            y0,
+            y1,
+            &fluid,
+            &Collision::Bgk,
+            in_band,
+        );
         let (lo, hi) = (y0 * nx, y1 * nx);
         let covered = CoveredNodes {
             nodes: &nodes[lo..hi],

@@ -1,6 +1,7 @@
 //! Checkpoints of a [`FluidLattice`] (serde): shape, side conditions, collision parameters, node flags, the
 //! current populations (every plane in full, padding included), the step counter, the PSM coverage (covered
-//! nodes, shares, owners, the momentum exchanged at the last step, the weighting) and the solid operator. The
+//! nodes, shares, owners, the momentum exchanged at the last step, the weighting), the solid operator and the
+//! fluid collision (BGK, or TRT with its magic parameter, checked again on load). The
 //! special-node list is derived from the flags and rebuilt. The populations are saved in the two-lattice layout
 //! whatever the streaming scheme and step parity (see [`FluidLattice::populations`]), and a loaded lattice starts
 //! from that layout with the default scheme (a run sets its own afterwards): either continues bitwise as the
@@ -9,7 +10,7 @@
 use std::borrow::Cow;
 
 use lbdem_kernels::fluid::boundary::Boundaries;
-use lbdem_kernels::fluid::collide::SolidOperator;
+use lbdem_kernels::fluid::collide::{Collision, SolidOperator};
 use lbdem_kernels::fluid::step::FluidParams;
 use lbdem_kernels::Real;
 use serde::de::Error as _;
@@ -29,6 +30,7 @@ struct Record<'a, T: Real> {
     populations: Cow<'a, [T]>,
     steps: u64,
     solid_operator: SolidOperator,
+    collision: Collision<T>,
     coverage: Option<Cow<'a, Coverage<T>>>,
 }
 
@@ -43,6 +45,7 @@ impl<T: Real + Serialize> Serialize for FluidLattice<T> {
             populations: self.populations(),
             steps: self.steps,
             solid_operator: self.solid_operator,
+            collision: self.collision,
             coverage: self.coverage.as_ref().map(Cow::Borrowed),
         }
         .serialize(s)
@@ -73,6 +76,9 @@ impl<'de, T: Real + Deserialize<'de>> Deserialize<'de> for FluidLattice<T> {
         lattice.populations_mut().copy_from_slice(&r.populations);
         lattice.steps = r.steps;
         lattice.solid_operator = r.solid_operator;
+        lattice
+            .set_collision(r.collision)
+            .map_err(|e| D::Error::custom(e.to_string()))?;
         if let Some(c) = r.coverage {
             let c = c.into_owned();
             let n = c.shares.len();
