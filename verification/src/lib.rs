@@ -8,6 +8,21 @@
 //! that finite domain the test is itself an exhaustive proof. See `harness` for the bodies.
 pub mod harness;
 
+/// Number of proptest cases for a property whose usual count is `default`: `default`, unless the environment
+/// variable `LBDEM_PROPTEST_CASES` holds a positive number, which then replaces it for this run (the
+/// mutation-testing command sets it low to keep each mutant cheap; a soak run can set it high). The new
+/// property files use it; proptest's own `PROPTEST_CASES` only reaches configs built from
+/// `ProptestConfig::default()`.
+pub fn proptest_cases(default: u32) -> u32 {
+    match std::env::var("LBDEM_PROPTEST_CASES")
+        .ok()
+        .and_then(|v| v.trim().parse::<u32>().ok())
+    {
+        Some(n) if n > 0 => n,
+        _ => default,
+    }
+}
+
 /// Source of nondeterministic choices for a proof harness body.
 pub trait Chooser {
     /// A value in `lo..=hi`.
