@@ -163,8 +163,9 @@ proptest! {
     }
 
     /// `covering` gives a valid grid whose origin is the box's low corner, with cells at least the minimum
-    /// size, at most the cap per axis, as many as fit (⌊extent / min size⌋, clamped to 1..=cap), and together
-    /// at least as long as the box on each axis.
+    /// size, at most the cap per axis, as many as fit (⌊extent / min size⌋, clamped to 1..=cap), together at
+    /// least as long as the box on each axis, and no larger than that needs: the minimum size, or, where the
+    /// cap forced fewer cells, the extent over the cell count of the axis that needs the most.
     #[test]
     fn covering_covers_the_box_from_its_low_corner(
         lo in [-100.0f64..=100.0, -100.0f64..=100.0], extent in [0.0f64..=50.0, 0.0f64..=50.0],
@@ -181,6 +182,10 @@ proptest! {
             // n · size ≥ extent, up to the rounding of extent / n (one ulp).
             prop_assert!(n as f64 * g.cell_size >= e * (1.0 - 4.0 * f64::EPSILON), "{} cells of {} for {}", n, g.cell_size, e);
         }
+        let needed = min_size
+            .max((hi[0] - lo[0]) / g.nx as f64)
+            .max((hi[1] - lo[1]) / g.ny as f64);
+        prop_assert!(g.cell_size <= needed * (1.0 + 4.0 * f64::EPSILON), "cell {} where {} suffices", g.cell_size, needed);
     }
 }
 

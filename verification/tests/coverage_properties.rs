@@ -348,17 +348,36 @@ proptest! {
     }
 }
 
-/// Non-positive or NaN sizes and empty rectangles give 0, never NaN, for both shapes.
+/// Non-positive or NaN sizes and empty rectangles give 0, never NaN, for both shapes: for rectangles inside
+/// the body, crossing its boundary and containing it (a negative semi-axis must not be taken as a mirror
+/// image), and for rectangles of zero width or height crossing the boundary (exactly 0, not a sum of sector
+/// terms that cancels to roundoff).
 #[test]
 fn degenerate_bodies_and_rectangles_cover_nothing() {
-    let rect = [-1.0, 1.0, -1.0, 1.0];
-    for bad in [0.0, -1.0, f64::NAN] {
-        assert_eq!(
-            disc_rectangle_area([0.0, 0.0], bad, -1.0, 1.0, -1.0, 1.0),
-            0.0
-        );
-        assert_eq!(ellipse_rectangle_area([0.0, 0.0], bad, 1.0, 0.3, rect), 0.0);
-        assert_eq!(ellipse_rectangle_area([0.0, 0.0], 1.0, bad, 0.3, rect), 0.0);
+    let rects = [
+        [-0.5, 0.5, -0.5, 0.5],
+        [0.2, 2.0, -0.3, 1.7],
+        [-3.0, 3.0, -3.0, 3.0],
+    ];
+    for rect in rects {
+        let [x0, x1, y0, y1] = rect;
+        for bad in [0.0, -1.0, -2.5, f64::NAN] {
+            assert_eq!(disc_rectangle_area([0.0, 0.0], bad, x0, x1, y0, y1), 0.0);
+            for theta in [0.0, 0.3, 2.0] {
+                assert_eq!(
+                    ellipse_rectangle_area([0.0, 0.0], bad, 1.0, theta, rect),
+                    0.0
+                );
+                assert_eq!(
+                    ellipse_rectangle_area([0.0, 0.0], 1.0, bad, theta, rect),
+                    0.0
+                );
+                assert_eq!(
+                    ellipse_rectangle_area([0.0, 0.0], bad, bad, theta, rect),
+                    0.0
+                );
+            }
+        }
     }
     for (x0, x1, y0, y1) in [
         (1.0, 1.0, -1.0, 1.0),
@@ -370,6 +389,26 @@ fn degenerate_bodies_and_rectangles_cover_nothing() {
             ellipse_rectangle_area([0.0, 0.0], 2.0, 1.0, 0.3, [x0, x1, y0, y1]),
             0.0
         );
+    }
+    // Zero-width and zero-height rectangles through the boundary of a tilted ellipse and of a disc.
+    for k in 0..400 {
+        let t = k as f64 * 0.0137;
+        let (x, y) = (
+            -2.5 + 5.0 * (t * 7.3).fract(),
+            -2.5 + 5.0 * (t * 3.1).fract(),
+        );
+        let theta = t * 5.0;
+        for rect in [[x, x, y - 3.0, y + 3.0], [x - 3.0, x + 3.0, y, y]] {
+            assert_eq!(
+                ellipse_rectangle_area([0.1, -0.2], 2.0, 0.7, theta, rect),
+                0.0,
+                "{rect:?}"
+            );
+            assert_eq!(
+                disc_rectangle_area([0.1, -0.2], 1.3, rect[0], rect[1], rect[2], rect[3]),
+                0.0
+            );
+        }
     }
 }
 
