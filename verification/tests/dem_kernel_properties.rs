@@ -12,7 +12,9 @@
 //! * the kinetic energy ½ m |v|² + ½ I ω², and PFC local damping −α |F| sign(v);
 //! * `Placed::support_derivatives` (h, dh/dθ and the radius of curvature ρ = h + d²h/dθ², by centred
 //!   differences of the support function written here) and `Placed::contains` (against the oracle's
-//!   point-in-ellipse test, away from the boundary).
+//!   point-in-ellipse test, away from the boundary);
+//! * `Wall::project` (the foot of the perpendicular: on the wall, reached along the normal) and
+//!   `WallSegment::wall` (unit left normal, length, the documented zero-length case).
 //!
 //! **Tolerances.** s is a few dozen operations on lengths ≤ |d| + a + b ≤ 4, so it carries ≤ 64 ε of that
 //! (3e-14); the centred difference over ±1e-6 rad then has roundoff ≤ 3e-14/1e-6 and truncation
@@ -22,7 +24,7 @@ use lbdem_kernels::dem::bond::{parallel_bond_force, ParallelBond};
 use lbdem_kernels::dem::contact::ellipse_ellipse;
 use lbdem_kernels::dem::integrate::kinetic_energy;
 use lbdem_kernels::dem::law::{local_damping, BodyState};
-use lbdem_kernels::dem::shape::{Particle, Placed};
+use lbdem_kernels::dem::shape::{Particle, Placed, Wall, WallSegment};
 use lbdem_verification::proptest_cases;
 use proptest::prelude::*;
 use std::f64::consts::{PI, TAU};
@@ -254,4 +256,45 @@ proptest! {
         }
         prop_assert!(compared > 0);
     }
+}
+
+proptest! {
+    #![proptest_config(config(256))]
+
+    /// The projection of x onto a wall lies on the wall, and x is reached from it along the normal by the
+    /// signed distance; a segment's wall has the unit left normal of start → end and its length.
+    #[test]
+    fn wall_projection_and_segment_geometry(
+        p in [-5.0f64..5.0, -5.0f64..5.0], angle in -PI..PI, x in [-5.0f64..5.0, -5.0f64..5.0],
+        e in [-3.0f64..3.0, -3.0f64..3.0],
+    ) {
+        let wall = Wall::from_angle(p, angle);
+        let f = wall.project(x);
+        let s = wall.signed_distance(x);
+        prop_assert!(wall.signed_distance(f).abs() <= 1e-14, "foot {f:?} off the wall");
+        for k in 0..2 {
+            prop_assert!((f[k] + s * wall.normal[k] - x[k]).abs() <= 1e-14, "axis {k}");
+        }
+        let seg = WallSegment { start: p, end: [p[0] + e[0], p[1] + e[1]] };
+        let (w, length) = seg.wall();
+        // The segment as stored (end − start carries the rounding of start + e).
+        let e = [seg.end[0] - p[0], seg.end[1] - p[1]];
+        let len = e[0].hypot(e[1]);
+        prop_assume!(len > 1e-3);
+        prop_assert!((length - len).abs() <= 4.0 * f64::EPSILON * len, "length {length} vs {len}");
+        prop_assert_eq!(w.point, p);
+        prop_assert!((w.normal[0] + e[1] / len).abs() <= 1e-15 && (w.normal[1] - e[0] / len).abs() <= 1e-15, "normal {:?}", w.normal);
+        prop_assert!((seg.abscissa(seg.end) - len).abs() <= 1e-13 && seg.abscissa(seg.start).abs() <= 1e-15, "abscissae {} {}", seg.abscissa(seg.start), seg.abscissa(seg.end));
+    }
+}
+
+/// A zero-length segment: normal (0, 1), length 0 (documented), not NaN.
+#[test]
+fn zero_length_segment_has_the_documented_wall() {
+    let seg = WallSegment {
+        start: [1.5, -2.0],
+        end: [1.5, -2.0],
+    };
+    let (w, length) = seg.wall();
+    assert_eq!((w.normal, length, w.point), ([0.0, 1.0], 0.0, [1.5, -2.0]));
 }
