@@ -25,7 +25,8 @@ use lbdem_kernels::fluid::aa::{
 };
 use lbdem_kernels::fluid::boundary::{Boundaries, SideCondition};
 use lbdem_kernels::fluid::collide::{
-    bgk_collide_slices, psm_collide, PsmParams, SolidOperator, SolidShare, Weighting,
+    bgk_collide_slices, psm_collide, Collision, PsmParams, SolidOperator, SolidShare, Trt,
+    Weighting,
 };
 use lbdem_kernels::fluid::d2q9::{density, equilibrium, momentum, OPPOSITE, Q};
 use lbdem_kernels::fluid::lattice::LatticeShape;
@@ -93,6 +94,9 @@ struct Problem {
     flags: Vec<u8>,
     params: FluidParams<f64>,
     psm: PsmParams<f64>,
+    /// The fluid collision, BGK or TRT with a random magic parameter (the same for the bulk, special and
+    /// covered nodes).
+    collision: Collision<f64>,
     /// Covered nodes (increasing), share offsets (nodes + 1) and shares.
     covered: Vec<u32>,
     offsets: Vec<u32>,
@@ -137,6 +141,12 @@ fn random_problem(nx: usize, ny: usize, seed: u64, force_kind: usize) -> Problem
     };
     assert_eq!(bc.validate(), Ok(()));
     let tau = rng.range(0.55, 1.8);
+    let collision = if rng.chance(0.5) {
+        Collision::Bgk
+    } else {
+        // Any Λ > 0 gives τ⁻ > ½; the range spans the usual choices (1/12, 3/16, 1/4, 1/2).
+        Collision::Trt(Trt::new(rng.range(0.05, 0.6)).expect("positive magic parameter"))
+    };
     let force = force_of(force_kind, &mut rng);
     let solid = [
         SolidOperator::NonEquilibriumBounceBack,
@@ -187,7 +197,9 @@ fn random_problem(nx: usize, ny: usize, seed: u64, force_kind: usize) -> Problem
             weighting,
             force,
             solid,
+            collision,
         },
+        collision,
         covered,
         offsets,
         shares,
@@ -227,7 +239,7 @@ fn two_lattice_step(
         let y1 = (y0 + band_rows).min(ny);
         let mut band = band_mut(&p.shape, planes_mut(&p.shape, dst), y0, y1);
         let sp = nodes_in_rows(&p.shape, &special, y0, y1);
-        step_band(&domain, src, &mut band, y0, y1, &p.params, sp);
+        step_band(&domain, src, &mut band, y0, y1, &p.params, &p.collision, sp);
         let ks = covered_in_rows(p, y0, y1);
         let (a, b) = (p.offsets[ks.start] as usize, p.offsets[ks.end] as usize);
         let covered = CoveredNodes {
@@ -274,7 +286,7 @@ fn aa_step(
     // 1. Special nodes (and the covered ones among them) from the untouched buffer.
     let special_vals: Vec<[f64; Q]> = special
         .iter()
-        .map(|&n| special_node_value(&domain, buf, layout, &p.params, n as usize))
+        .map(|&n| special_node_value(&domain, buf, layout, &p.params, &p.collision, n as usize))
         .collect();
     let mut covered_vals: Vec<Option<[f64; Q]>> = vec![None; p.covered.len()];
     for (k, &n) in p.covered.iter().enumerate() {
@@ -318,7 +330,7 @@ fn aa_step(
                 psm_collide(&mut f, &p.psm, &p.shares[a..b], &mut exchange[a..b]);
                 covered_vals[k] = Some(f);
             }
-            aa_bulk_rows(band, kind, &p.params);
+            aa_bulk_rows(band, kind, &p.params, &p.collision);
             for &k in &ks {
                 let n = p.covered[k] as usize;
                 let f = covered_vals[k].expect("collided above");
@@ -530,6 +542,11 @@ proptest! {
                 SolidOperator::BounceBack,
                 SolidOperator::LinearizedBounceBack,
             ][op],
+            collision: if rng.chance(0.5) {
+                Collision::Bgk
+            } else {
+                Collision::Trt(Trt::new(rng.range(0.05, 0.6)).expect("positive magic parameter"))
+            },
         };
         let shares: Vec<SolidShare<f64>> = (0..shares)
             .map(|_| SolidShare { fraction: rng.unit(), velocity: rng.velocity(0.05) })
