@@ -10,7 +10,8 @@
 //! 4. platens: [`wall_contact`] + [`linear_contact_force`] with the platen's own velocity (a moving wall);
 //! 5. applied forces on chosen particles (`external_force`), gravity;
 //! 6. [`central_difference_step`] with PFC local damping α (particles marked `held` are not moved);
-//! 7. platens move: constant speed, or the PFC servo v = G (σ_target − σ_measured), G = λ L/(k_n N_c Δt).
+//! 7. platens move: constant speed, or the PFC servo v = G (σ_target − σ_measured), G = λ L/(k_n N_c Δt)
+//!    ([`ServoLaw`]).
 //!
 //! Determinism: the per-pair and per-bond forces of steps 2–3 and the integration of step 6 are computed in
 //! parallel with rayon, but every element is computed independently into its own slot, and the sums into the
@@ -32,6 +33,7 @@ use lbdem_kernels::dem::contact::{closest_approach, wall_contact};
 use lbdem_kernels::dem::grid::{build_cell_grid, candidate_pairs, carry_contact_history, CellGrid};
 use lbdem_kernels::dem::integrate::{central_difference_step, particle_critical_time_step};
 use lbdem_kernels::dem::law::{linear_contact_force, BodyState, ContactForce};
+use lbdem_kernels::dem::servo::ServoLaw;
 use lbdem_kernels::dem::shape::{Particle, Wall};
 use lbdem_kernels::Real;
 use rayon::prelude::*;
@@ -768,12 +770,12 @@ impl<T: Real> DemWorld<T> {
                     target_stress,
                     relaxation,
                     max_speed,
-                } => {
-                    let contacts = T::lit(pl.contacts.max(1) as f64);
-                    let gain = relaxation * pl.length / (kn * contacts * dt);
-                    let v = gain * (target_stress - pl.stress());
-                    v.max(-max_speed).min(max_speed)
+                } => ServoLaw {
+                    target_stress,
+                    relaxation,
+                    max_speed,
                 }
+                .speed(pl.stress(), pl.length, kn, pl.contacts, dt),
             };
             if pl.active {
                 pl.wall.point[0] += pl.wall.normal[0] * pl.speed * dt;
