@@ -652,9 +652,10 @@ proptest! {
 #[test]
 fn assembly_passes_refuse_bad_input_without_panicking() {
     use lbdem_kernels::dem::assembly::{
-        add_pair_contact_forces, add_wall_contact_forces, integrate_all, AssemblyError,
-        ContactModel,
+        add_pair_forces, add_wall_contact_forces, integrate_all, pair_contacts, wall_loads,
+        AssemblyError, ContactModel, WallBody, WallContactForce, WallLoad,
     };
+    use lbdem_kernels::dem::law::ContactForce;
     let model = ContactModel {
         normal_stiffness: 1e5,
         shear_stiffness: 6e5,
@@ -668,28 +669,33 @@ fn assembly_passes_refuse_bad_input_without_panicking() {
     ];
     let (mut f, mut t) = ([[0.0f64; 2]; 2], [0.0f64; 2]);
     let mut shear = [0.0; 1];
+    let mut slots = [ContactForce::zero(); 1];
     for bad in [[0, 2], [1, 1]] {
         assert_eq!(
-            add_pair_contact_forces(&model, &ps, &[bad], &mut shear, 1e-5, &mut f, &mut t),
+            pair_contacts(&model, &ps, &[bad], &mut shear, 1e-5, &mut slots),
             Err(AssemblyError::BadPair)
         );
     }
     assert_eq!(
-        add_pair_contact_forces(&model, &ps, &[[0, 1]], &mut [], 1e-5, &mut f, &mut t),
+        pair_contacts(&model, &ps, &[[0, 1]], &mut [], 1e-5, &mut slots),
         Err(AssemblyError::BufferLength)
     );
     assert_eq!(
-        add_pair_contact_forces(&model, &ps, &[[0, 1]], &mut shear, 1e-5, &mut f, &mut t),
-        Ok(1)
+        pair_contacts(&model, &ps, &[[0, 1]], &mut shear, 1e-5, &mut slots),
+        Ok(())
+    );
+    assert_eq!(
+        add_pair_forces(&[[0, 1]], &slots, &mut f, &mut t).map(|s| (s.active, s.loaded)),
+        Ok((1, 1))
     );
     // Newton's third law survives the accumulation; the overlap 0.05 gives k_n δ = 5000.
     assert_eq!(f[0], [-f[1][0], -f[1][1]]);
     assert!((f[1][0] - 5000.0).abs() < 1e-9 && f[1][1] == 0.0);
-    let walls = [Wall {
+    let walls = [WallBody::fixed(Wall {
         point: [0.0, -0.05],
         normal: [0.0, 1.0],
-    }];
-    let mut reaction = [[0.0f64; 2]; 1];
+    })];
+    let mut on_walls = [WallContactForce::none(); 2];
     assert_eq!(
         add_wall_contact_forces(
             &model,
@@ -699,7 +705,7 @@ fn assembly_passes_refuse_bad_input_without_panicking() {
             1e-5,
             &mut f,
             &mut t,
-            &mut reaction
+            &mut on_walls
         ),
         Err(AssemblyError::BufferLength)
     );
@@ -713,13 +719,17 @@ fn assembly_passes_refuse_bad_input_without_panicking() {
             1e-5,
             &mut f,
             &mut t,
-            &mut reaction
+            &mut on_walls
         ),
-        Ok(2)
+        Ok(())
     );
-    assert!((reaction[0][1] - 2.0 * 1e5 * 0.05).abs() < 1e-9);
+    let mut loads = [WallLoad::default(); 1];
+    assert_eq!(wall_loads(&on_walls, &mut loads), Ok(()));
+    assert_eq!(loads[0].contacts, 2);
+    // The particles push the floor down with 2 k_n δ.
+    assert!((loads[0].force[1] + 2.0 * 1e5 * 0.05).abs() < 1e-9);
     assert_eq!(
-        integrate_all(&mut ps, &f[..1], &t, [0.0; 2], 0.0, 1e-5),
+        integrate_all(&mut ps, &f[..1], &t, &[false; 2], [0.0; 2], 0.0, 1e-5),
         Err(AssemblyError::BufferLength)
     );
 }

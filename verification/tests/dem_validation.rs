@@ -371,11 +371,13 @@ fn poured_packing_comes_to_static_equilibrium() {
 /// Runs the pour; returns the particles and the total force of the walls on them at the last step.
 fn pour(use_assembly: bool) -> (Vec<Particle<f64>>, [f64; 2]) {
     use lbdem_kernels::dem::assembly::{
-        add_pair_contact_forces, add_wall_contact_forces, integrate_all, ContactModel,
+        add_pair_forces, add_wall_contact_forces, integrate_all, pair_contacts, wall_loads,
+        ContactModel, WallBody, WallContactForce, WallLoad,
     };
     use lbdem_kernels::dem::grid::{
         build_cell_grid, candidate_pairs, carry_contact_history, CellGrid,
     };
+    use lbdem_kernels::dem::law::ContactForce;
     use lbdem_kernels::dem::vector::add;
     let width = 1.0;
     let walls = [
@@ -442,30 +444,38 @@ fn pour(use_assembly: bool) -> (Vec<Particle<f64>>, [f64; 2]) {
             };
             let mut force = vec![[0.0f64; 2]; n];
             let mut torque = vec![0.0f64; n];
-            let mut reaction = [[0.0f64; 2]; 3];
-            add_pair_contact_forces(
-                &model,
-                &particles,
-                pairs,
-                values,
-                dt,
-                &mut force,
-                &mut torque,
-            )
-            .unwrap();
+            let mut slots = vec![ContactForce::zero(); pairs.len()];
+            pair_contacts(&model, &particles, pairs, values, dt, &mut slots).unwrap();
+            add_pair_forces(pairs, &slots, &mut force, &mut torque).unwrap();
+            let bodies = walls.map(WallBody::fixed);
+            let mut on_walls = vec![WallContactForce::none(); 3 * n];
             add_wall_contact_forces(
                 &model,
                 &particles,
-                &walls,
+                &bodies,
                 &mut wall_shear,
                 dt,
                 &mut force,
                 &mut torque,
-                &mut reaction,
+                &mut on_walls,
             )
             .unwrap();
-            wall_force = reaction.iter().fold([0.0; 2], |a, r| add(a, *r));
-            integrate_all(&mut particles, &force, &torque, [0.0, -G], 0.7, dt).unwrap();
+            let mut loads = [WallLoad::default(); 3];
+            wall_loads(&on_walls, &mut loads).unwrap();
+            // The walls' loads are what the particles do to them; the walls act with the opposite.
+            wall_force = loads
+                .iter()
+                .fold([0.0; 2], |a, l| [a[0] - l.force[0], a[1] - l.force[1]]);
+            integrate_all(
+                &mut particles,
+                &force,
+                &torque,
+                &vec![false; n],
+                [0.0, -G],
+                0.7,
+                dt,
+            )
+            .unwrap();
             prev_pairs.clear();
             prev_pairs.extend_from_slice(pairs);
             prev_values.clear();

@@ -72,7 +72,12 @@ pub struct BondForce<T> {
 }
 
 impl<T: Real> BondForce<T> {
-    fn zero(broke: Option<BondBreak<T>>) -> Self {
+    /// No force and no break (a broken bond's contribution; also the initial value of a slot).
+    pub fn zero() -> Self {
+        Self::idle(None)
+    }
+
+    fn idle(broke: Option<BondBreak<T>>) -> Self {
         BondForce {
             force_on_i: [T::zero(); 2],
             force_on_j: [T::zero(); 2],
@@ -147,7 +152,7 @@ pub fn point_bond_force<T: Real>(
     j: &Particle<T>,
 ) -> BondForce<T> {
     if !bond.intact {
-        return BondForce::zero(None);
+        return BondForce::idle(None);
     }
     let (pi, pj) = bond.material_points(i, j);
     let x = scale(add(pi, pj), T::lit(0.5));
@@ -165,7 +170,7 @@ pub fn point_bond_force<T: Real>(
         } else {
             BreakMode::Compression
         };
-        return BondForce::zero(Some(BondBreak {
+        return BondForce::idle(Some(BondBreak {
             mode,
             orientation: n[1].portable_atan2(n[0]),
             position: x,
@@ -263,7 +268,7 @@ pub fn parallel_bond_force<T: Real>(
     dt: T,
 ) -> BondForce<T> {
     if !bond.intact {
-        return BondForce::zero(None);
+        return BondForce::idle(None);
     }
     let d = sub(body_j.position, body_i.position);
     let dist = norm(d);
@@ -299,7 +304,7 @@ pub fn parallel_bond_force<T: Real>(
         bond.normal_force = T::zero();
         bond.shear_force = T::zero();
         bond.moment = T::zero();
-        return BondForce::zero(Some(BondBreak {
+        return BondForce::idle(Some(BondBreak {
             mode,
             orientation: n[1].portable_atan2(n[0]),
             position: x,
@@ -314,6 +319,74 @@ pub fn parallel_bond_force<T: Real>(
         torque_on_i: cross(sub(x, body_i.position), force_on_i) - bond.moment,
         torque_on_j: cross(sub(x, body_j.position), force_on_j) + bond.moment,
         broke: None,
+    }
+}
+
+/// A bond of an assembly: the particles it joins and its law with its state.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct Bond<T> {
+    /// Particle indices (i < j by convention; i ≠ j).
+    pub pair: [usize; 2],
+    /// Bond law and state.
+    pub law: BondLaw<T>,
+}
+
+/// The two bond laws.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub enum BondLaw<T> {
+    /// Point bond of eq. 6.13.
+    Point(PointBond<T>),
+    /// Potyondy–Cundall parallel bond; `radii` place it on the centre line (support values at bonding).
+    Parallel {
+        /// Bond state.
+        bond: ParallelBond<T>,
+        /// Radii of i and j along the bond normal at bonding.
+        radii: [T; 2],
+    },
+}
+
+impl<T: Real> Bond<T> {
+    /// Whether the bond still carries load.
+    pub fn intact(&self) -> bool {
+        match &self.law {
+            BondLaw::Point(b) => b.intact,
+            BondLaw::Parallel { bond, .. } => bond.intact,
+        }
+    }
+
+    /// Translational and rotational stiffness the bond adds to one of its particles, whose largest lever arm
+    /// is `lever` (the critical-step estimate): point bond k_b and k_b R²; parallel bond max(k̄_n, k̄_s) A and
+    /// k̄_n I + k̄_s A R².
+    pub fn stiffness(&self, lever: T) -> (T, T) {
+        match &self.law {
+            BondLaw::Point(b) => (b.stiffness, b.stiffness * lever * lever),
+            BondLaw::Parallel { bond, .. } => {
+                let a = bond.area();
+                (
+                    bond.normal_stiffness.max(bond.shear_stiffness) * a,
+                    bond.normal_stiffness * bond.inertia()
+                        + bond.shear_stiffness * a * lever * lever,
+                )
+            }
+        }
+    }
+
+    /// Evaluate the bond between its particles `i` and `j` over a step `dt` ([`point_bond_force`] or
+    /// [`parallel_bond_force`] with the particles' current states), updating its state.
+    pub fn force(&mut self, i: &Particle<T>, j: &Particle<T>, dt: T) -> BondForce<T> {
+        match &mut self.law {
+            BondLaw::Point(bond) => point_bond_force(bond, i, j),
+            BondLaw::Parallel { bond, radii } => parallel_bond_force(
+                bond,
+                &BodyState::of(i),
+                radii[0],
+                &BodyState::of(j),
+                radii[1],
+                dt,
+            ),
+        }
     }
 }
 

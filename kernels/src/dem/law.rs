@@ -159,7 +159,7 @@ impl<T: Real> BodyState<T> {
     }
 }
 
-/// Forces and torques of one contact.
+/// Forces and torques of one contact (all zero for an inactive one).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ContactForce<T> {
     /// Force on body i (= −`force_on_j`).
@@ -176,6 +176,9 @@ pub struct ContactForce<T> {
     pub shear_force: T,
     /// Whether the Coulomb cap was reached (sliding).
     pub sliding: bool,
+    /// Whether the contact was active (overlap δ > 0): the law was applied. An active contact may still carry
+    /// no force (a dashpot cancelling the spring under the no-tension clip).
+    pub active: bool,
 }
 
 impl<T: Real> ContactForce<T> {
@@ -189,6 +192,7 @@ impl<T: Real> ContactForce<T> {
             normal_force: T::zero(),
             shear_force: T::zero(),
             sliding: false,
+            active: false,
         }
     }
 }
@@ -234,6 +238,7 @@ pub fn linear_contact_force<T: Real>(
         normal_force,
         shear_force,
         sliding,
+        active: true,
     }
 }
 

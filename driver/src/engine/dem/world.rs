@@ -1,22 +1,24 @@
 //! [`DemWorld`]: the dry discrete-element assembly the driver owns, and its step.
 //!
-//! One step (dissertation ch. 2 / ch. 6.6 solid half; order of calls as in `lbdem_kernels::dem`):
+//! One step (dissertation ch. 2 / ch. 6.6 solid half; order of calls as in `lbdem_kernels::dem`), every force
+//! and the integration by the kernels' whole-assembly passes ([`lbdem_kernels::dem::assembly`]):
 //!
 //! 1. broad phase: [`build_cell_grid`] over the particles' bounding box, [`candidate_pairs`] (bounding circles
 //!    within `margin`), [`carry_contact_history`] (shear forces of persisting contacts);
-//! 2. contacts: [`closest_approach`] + [`linear_contact_force`] per pair;
-//! 3. bonds: [`point_bond_force`] (eq. 6.13) or [`parallel_bond_force`] (Potyondy & Cundall 2004) per bond, each
-//!    break recorded as a [`BreakRecord`] (step, position, mode, orientation, load);
-//! 4. platens: [`wall_contact`] + [`linear_contact_force`] with the platen's own velocity (a moving wall);
-//! 5. applied forces on chosen particles (`external_force`), gravity;
-//! 6. [`central_difference_step`] with PFC local damping α (particles marked `held` are not moved);
+//! 2. contacts: [`pair_contacts`] (closest approach + linear contact law per pair), [`add_pair_forces`];
+//! 3. bonds: [`bond_forces`] (point bond of eq. 6.13 or Potyondy & Cundall 2004 parallel bond per bond),
+//!    [`add_bond_forces`]; each break recorded as a [`BreakRecord`] (step, position, mode, orientation, load);
+//! 4. platens: [`add_wall_contact_forces`] with each platen's own velocity (a moving wall), [`wall_loads`];
+//! 5. applied forces on chosen particles (`external_force`, `external_torque`);
+//! 6. [`integrate_all`]: central difference with gravity and PFC local damping α (particles marked `held` are
+//!    not moved);
 //! 7. platens move: constant speed, or the PFC servo v = G (σ_target − σ_measured), G = λ L/(k_n N_c Δt)
 //!    ([`ServoLaw`]).
 //!
-//! Determinism: the per-pair and per-bond forces of steps 2–3 and the integration of step 6 are computed in
-//! parallel with rayon, but every element is computed independently into its own slot, and the sums into the
-//! particle forces run serially in pair, bond, platen order. The result is bitwise identical for any number of
-//! threads (tested).
+//! Determinism: the evaluation passes of steps 2–4 and the integration run in parallel chunks with rayon, but
+//! every element is computed independently into its own slot, and the summation passes run serially in pair,
+//! bond, then particle order (see the kernels' assembly module). The result is bitwise identical for any number
+//! of threads (tested).
 //!
 //! Critical step (the PFC estimate: Itasca PFC2D manual; Cundall & Strack 1979): per particle √(m/Σk) for translation and √(I/Σk_rot) for rotation, with
 //! Σk over an assumed coordination of [`ASSUMED_CONTACT_COORDINATION`] contacts (k = max(k_n, k_s),
@@ -25,14 +27,15 @@
 //!
 //! Units: any consistent system (the dry scenes use cgs: cm, g, s, dyne; 2-D stresses are force per unit
 //! length of a unit-thickness sample, dyne/cm ≡ dyne/cm² × 1 cm).
-use lbdem_kernels::dem::assembly::ContactModel;
-use lbdem_kernels::dem::bond::{
-    parallel_bond_force, point_bond_force, BondForce, BreakMode, ParallelBond, PointBond,
+use lbdem_kernels::dem::assembly::{
+    add_bond_forces, add_pair_forces, add_wall_contact_forces, bond_forces, integrate_all,
+    pair_contacts, wall_loads, ContactModel, WallBody, WallContactForce, WallLoad,
 };
-use lbdem_kernels::dem::contact::{closest_approach, wall_contact};
+pub use lbdem_kernels::dem::bond::{Bond, BondLaw};
+use lbdem_kernels::dem::bond::{BondForce, BreakMode, ParallelBond, PointBond};
+use lbdem_kernels::dem::contact::closest_approach;
 use lbdem_kernels::dem::grid::{build_cell_grid, candidate_pairs, carry_contact_history, CellGrid};
-use lbdem_kernels::dem::integrate::{central_difference_step, particle_critical_time_step};
-use lbdem_kernels::dem::law::{linear_contact_force, BodyState, ContactForce};
+use lbdem_kernels::dem::law::ContactForce;
 use lbdem_kernels::dem::servo::ServoLaw;
 use lbdem_kernels::dem::shape::{Particle, Wall};
 use lbdem_kernels::Real;
@@ -50,54 +53,6 @@ pub const CRITICAL_STEP_SAFETY: f64 = 0.8;
 const PARALLEL_CHUNK: usize = 512;
 /// Largest number of broad-phase cells along an axis.
 const MAX_CELLS_PER_AXIS: usize = 4096;
-
-/// A bond and the pair it joins.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-pub struct Bond<T> {
-    /// Particle indices (i < j).
-    pub pair: [usize; 2],
-    /// Bond law and state.
-    pub law: BondLaw<T>,
-}
-
-/// The two bond laws of the kernels.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-pub enum BondLaw<T> {
-    /// Point bond of eq. 6.13.
-    Point(PointBond<T>),
-    /// Potyondy–Cundall parallel bond; `radii` place it on the centre line (support values at bonding).
-    Parallel {
-        /// Bond state.
-        bond: ParallelBond<T>,
-        /// Radii of i and j along the bond normal at bonding.
-        radii: [T; 2],
-    },
-}
-
-impl<T: Real> Bond<T> {
-    /// Whether the bond still carries load.
-    pub fn intact(&self) -> bool {
-        match &self.law {
-            BondLaw::Point(b) => b.intact,
-            BondLaw::Parallel { bond, .. } => bond.intact,
-        }
-    }
-
-    /// Translational and rotational stiffness the bond adds to each of its particles (critical step).
-    fn stiffness(&self, lever: T) -> (T, T) {
-        match &self.law {
-            BondLaw::Point(b) => (b.stiffness, b.stiffness * lever * lever),
-            BondLaw::Parallel { bond, .. } => {
-                let a = bond.area();
-                (
-                    bond.normal_stiffness.max(bond.shear_stiffness) * a,
-                    bond.normal_stiffness * bond.inertia()
-                        + bond.shear_stiffness * a * lever * lever,
-                )
-            }
-        }
-    }
-}
 
 /// How bonds are installed between touching particles (chosen by the caller).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -266,6 +221,12 @@ pub struct DemWorld<T> {
     contact_forces: Vec<ContactForce<T>>,
     #[serde(skip)]
     bond_forces: Vec<BondForce<T>>,
+    #[serde(skip)]
+    wall_bodies: Vec<WallBody<T>>,
+    #[serde(skip)]
+    wall_forces: Vec<WallContactForce<T>>,
+    #[serde(skip)]
+    wall_loads: Vec<WallLoad<T>>,
     force: Vec<[T; 2]>,
     torque: Vec<T>,
     wall_shear: Vec<T>,
@@ -321,6 +282,9 @@ impl<T: Real> DemWorld<T> {
             previous_shear: Vec::new(),
             contact_forces: Vec::new(),
             bond_forces: Vec::new(),
+            wall_bodies: Vec::new(),
+            wall_forces: Vec::new(),
+            wall_loads: Vec::new(),
             force: Vec::new(),
             torque: Vec::new(),
             wall_shear: Vec::new(),
@@ -366,31 +330,20 @@ impl<T: Real> DemWorld<T> {
         &self.pairs
     }
 
-    /// The critical step estimate of the module documentation.
+    /// The critical step estimate of the module documentation (the kernel's
+    /// [`ContactModel::bonded_critical_time_step`] with [`ASSUMED_CONTACT_COORDINATION`] contacts).
     pub fn critical_time_step(&self) -> T {
-        let z = T::lit(ASSUMED_CONTACT_COORDINATION);
-        let k = self.model.normal_stiffness.max(self.model.shear_stiffness);
-        let mut kt: Vec<T> = vec![z * k; self.particles.len()];
-        let mut kr: Vec<T> = self
-            .particles
-            .iter()
-            .map(|p| {
-                let r = p.shape.bounding_radius();
-                z * self.model.shear_stiffness * r * r
-            })
-            .collect();
-        for b in self.bonds.iter().filter(|b| b.intact()) {
-            for &i in &b.pair {
-                let (t, r) = b.stiffness(self.particles[i].shape.bounding_radius());
-                kt[i] += t;
-                kr[i] += r;
-            }
-        }
-        self.particles
-            .iter()
-            .zip(kt.iter().zip(&kr))
-            .map(|(p, (&t, &r))| particle_critical_time_step(p.mass, t, p.moment_of_inertia, r))
-            .fold(T::infinity(), |a, b| a.min(b))
+        let n = self.particles.len();
+        let (mut kt, mut kr) = (vec![T::zero(); n], vec![T::zero(); n]);
+        self.model
+            .bonded_critical_time_step(
+                &self.particles,
+                &self.bonds,
+                T::lit(ASSUMED_CONTACT_COORDINATION),
+                &mut kt,
+                &mut kr,
+            )
+            .expect("scratch sized to the particles; bonds join particles of the world")
     }
 
     /// Add a platen; returns its index.
@@ -596,78 +549,48 @@ impl<T: Real> DemWorld<T> {
         self.force.resize(n, [T::zero(); 2]);
         self.torque.clear();
         self.torque.resize(n, T::zero());
-
-        // Contacts: independent per pair (parallel), summed in pair order (serial).
         let model = self.model;
         let particles = &self.particles;
+        const INVALID: &str = "the broad phase's pairs and the bonds join particles of the world";
+
+        // Contacts: the kernel's pair passes, evaluated in parallel chunks, summed in pair order.
         self.contact_forces
             .resize(self.pairs.len(), ContactForce::zero());
         self.pairs
-            .par_iter()
-            .zip(self.shear.par_iter_mut())
-            .zip(self.contact_forces.par_iter_mut())
-            .with_min_len(PARALLEL_CHUNK)
-            .for_each(|((&[i, j], history), out)| {
-                let (pi, pj) = (&particles[i], &particles[j]);
-                let c = closest_approach(pi, pj);
-                let law = model.law(pi.mass, pj.mass);
-                *out = linear_contact_force(
-                    &law,
-                    &c,
-                    &BodyState::synchronous(pi, dt),
-                    &BodyState::synchronous(pj, dt),
-                    history,
-                    dt,
-                );
-            });
-        let mut active = 0;
-        let mut normal_sum = T::zero();
-        for (&[i, j], f) in self.pairs.iter().zip(&self.contact_forces) {
-            if f.normal_force > T::zero() || f.shear_force != T::zero() {
-                active += 1;
-                normal_sum += f.normal_force;
-            }
-            add_to(&mut self.force[i], f.force_on_i);
-            add_to(&mut self.force[j], f.force_on_j);
-            self.torque[i] += f.torque_on_i;
-            self.torque[j] += f.torque_on_j;
-        }
-        self.active_contacts = active;
-        self.contact_normal_sum = normal_sum;
+            .par_chunks(PARALLEL_CHUNK)
+            .zip(self.shear.par_chunks_mut(PARALLEL_CHUNK))
+            .zip(self.contact_forces.par_chunks_mut(PARALLEL_CHUNK))
+            .try_for_each(|((pairs, shear), out)| {
+                pair_contacts(&model, particles, pairs, shear, dt, out)
+            })
+            .expect(INVALID);
+        let sums = add_pair_forces(
+            &self.pairs,
+            &self.contact_forces,
+            &mut self.force,
+            &mut self.torque,
+        )
+        .expect(INVALID);
+        self.active_contacts = sums.loaded;
+        self.contact_normal_sum = sums.normal_force;
 
-        // Bonds: independent per bond (parallel), summed and recorded in bond order (serial).
+        // Bonds: the kernel's bond passes, evaluated in parallel chunks, summed in bond order; breaks recorded in
+        // bond order.
         if !self.bonds.is_empty() {
-            self.bond_forces.resize(
-                self.bonds.len(),
-                BondForce {
-                    force_on_i: [T::zero(); 2],
-                    force_on_j: [T::zero(); 2],
-                    torque_on_i: T::zero(),
-                    torque_on_j: T::zero(),
-                    broke: None,
-                },
-            );
+            self.bond_forces.resize(self.bonds.len(), BondForce::zero());
             self.bonds
-                .par_iter_mut()
-                .zip(self.bond_forces.par_iter_mut())
-                .with_min_len(PARALLEL_CHUNK)
-                .for_each(|(b, out)| {
-                    let [i, j] = b.pair;
-                    let (pi, pj) = (&particles[i], &particles[j]);
-                    *out = match &mut b.law {
-                        BondLaw::Point(bond) => point_bond_force(bond, pi, pj),
-                        BondLaw::Parallel { bond, radii } => parallel_bond_force(
-                            bond,
-                            &BodyState::of(pi),
-                            radii[0],
-                            &BodyState::of(pj),
-                            radii[1],
-                            dt,
-                        ),
-                    };
-                });
+                .par_chunks_mut(PARALLEL_CHUNK)
+                .zip(self.bond_forces.par_chunks_mut(PARALLEL_CHUNK))
+                .try_for_each(|(bonds, out)| bond_forces(particles, bonds, dt, out))
+                .expect(INVALID);
+            add_bond_forces(
+                &self.bonds,
+                &self.bond_forces,
+                &mut self.force,
+                &mut self.torque,
+            )
+            .expect(INVALID);
             for (b, f) in self.bonds.iter().zip(&self.bond_forces) {
-                let [i, j] = b.pair;
                 if let Some(br) = f.broke {
                     self.breaks.push(BreakRecord {
                         step: self.step,
@@ -677,56 +600,41 @@ impl<T: Real> DemWorld<T> {
                         orientation: br.orientation,
                         load: br.load,
                     });
-                    continue;
                 }
-                add_to(&mut self.force[i], f.force_on_i);
-                add_to(&mut self.force[j], f.force_on_j);
-                self.torque[i] += f.torque_on_i;
-                self.torque[j] += f.torque_on_j;
             }
         }
 
-        // Platens: particles in index order, platens in slice order (serial; O(N × platens)).
+        // Platens: the kernel's wall passes, by particle in parallel chunks (each particle's own entries), then
+        // the platen loads summed over the particles in index order.
         let walls = self.platens.len();
         if self.wall_shear.len() != n * walls {
             self.wall_shear = vec![T::zero(); n * walls];
         }
-        for pl in self.platens.iter_mut() {
-            pl.reaction = [T::zero(); 2];
-            pl.contacts = 0;
-        }
-        for (i, p) in self.particles.iter().enumerate() {
-            for (w, pl) in self.platens.iter_mut().enumerate() {
-                let history = &mut self.wall_shear[i * walls + w];
-                let contact = if pl.active {
-                    wall_contact(p, &pl.wall)
-                } else {
-                    None
-                };
-                let Some(c) = contact else {
-                    *history = T::zero();
-                    continue;
-                };
-                let law = model.law(p.mass, T::infinity());
-                let wall_body = BodyState {
-                    position: c.point_j,
+        if walls > 0 {
+            self.wall_bodies.clear();
+            self.wall_bodies
+                .extend(self.platens.iter().map(|pl| WallBody {
+                    wall: pl.wall,
                     velocity: [pl.wall.normal[0] * pl.speed, pl.wall.normal[1] * pl.speed],
-                    angular_velocity: T::zero(),
-                };
-                let f = linear_contact_force(
-                    &law,
-                    &c,
-                    &BodyState::synchronous(p, dt),
-                    &wall_body,
-                    history,
-                    dt,
-                );
-                add_to(&mut self.force[i], f.force_on_i);
-                self.torque[i] += f.torque_on_i;
-                // Force on the platen = −(force on the particle).
-                pl.reaction[0] -= f.force_on_i[0];
-                pl.reaction[1] -= f.force_on_i[1];
-                pl.contacts += 1;
+                    active: pl.active,
+                }));
+            self.wall_forces.resize(n * walls, WallContactForce::none());
+            let wall_bodies = &self.wall_bodies;
+            self.particles
+                .par_chunks(PARALLEL_CHUNK)
+                .zip(self.force.par_chunks_mut(PARALLEL_CHUNK))
+                .zip(self.torque.par_chunks_mut(PARALLEL_CHUNK))
+                .zip(self.wall_shear.par_chunks_mut(PARALLEL_CHUNK * walls))
+                .zip(self.wall_forces.par_chunks_mut(PARALLEL_CHUNK * walls))
+                .try_for_each(|((((ps, f), t), shear), out)| {
+                    add_wall_contact_forces(&model, ps, wall_bodies, shear, dt, f, t, out)
+                })
+                .expect("wall buffers sized to the particles and platens");
+            self.wall_loads.resize(walls, WallLoad::default());
+            wall_loads(&self.wall_forces, &mut self.wall_loads).expect("one load per platen");
+            for (pl, load) in self.platens.iter_mut().zip(&self.wall_loads) {
+                pl.reaction = load.force;
+                pl.contacts = load.contacts;
             }
         }
         for (f, e) in self.force.iter_mut().zip(&self.external_force) {
@@ -736,22 +644,18 @@ impl<T: Real> DemWorld<T> {
             *t += *e;
         }
 
-        // Integrate (independent per particle); held particles stay where they are.
+        // Integrate (the kernel's pass, in parallel chunks); held particles stay where they are.
         let (gravity, alpha) = (self.gravity, self.local_damping);
         if self.held.len() != n {
             self.held.resize(n, false);
         }
         self.particles
-            .par_iter_mut()
-            .zip(self.force.par_iter())
-            .zip(self.torque.par_iter())
-            .zip(self.held.par_iter())
-            .with_min_len(PARALLEL_CHUNK)
-            .for_each(|(((p, f), t), &held)| {
-                if !held {
-                    central_difference_step(p, *f, *t, gravity, alpha, dt)
-                }
-            });
+            .par_chunks_mut(PARALLEL_CHUNK)
+            .zip(self.force.par_chunks(PARALLEL_CHUNK))
+            .zip(self.torque.par_chunks(PARALLEL_CHUNK))
+            .zip(self.held.par_chunks(PARALLEL_CHUNK))
+            .try_for_each(|(((ps, f), t), held)| integrate_all(ps, f, t, held, gravity, alpha, dt))
+            .expect("force, torque and held sized to the particles");
 
         // Platen motion: servo speeds from this step's stresses, then move.
         if let Some(b) = self.sample_box {
