@@ -778,14 +778,16 @@ impl Persist for SolidOperator {
             SolidOperator::Superposition => 1,
             SolidOperator::BounceBack => 2,
             SolidOperator::LinearizedBounceBack => 3,
+            SolidOperator::LambdaConsistent => 4,
         });
     }
     fn load(d: &mut Decoder<'_>) -> Result<Self> {
-        Ok(match d.tag("PSM solid operator", 4)? {
+        Ok(match d.tag("PSM solid operator", 5)? {
             0 => SolidOperator::NonEquilibriumBounceBack,
             1 => SolidOperator::Superposition,
             2 => SolidOperator::BounceBack,
-            _ => SolidOperator::LinearizedBounceBack,
+            3 => SolidOperator::LinearizedBounceBack,
+            _ => SolidOperator::LambdaConsistent,
         })
     }
 }

@@ -15,14 +15,15 @@ use lbdem_kernels::fluid::aa::{
 };
 use lbdem_kernels::fluid::boundary::{Boundaries, SideCondition};
 use lbdem_kernels::fluid::collide::{
-    psm_collide, Collision, PsmParams, SolidOperator, SolidShare, Weighting,
+    psm_collide_links, psm_velocity, Collision, OpenLinks, PsmParams, SolidOperator, SolidShare,
+    Weighting,
 };
 use lbdem_kernels::fluid::d2q9::{equilibrium, OPPOSITE, Q};
 use lbdem_kernels::fluid::lattice::{LatticeShape, Side};
 use lbdem_kernels::fluid::step::{
     classify_special_nodes, collide_covered_nodes, covered_node_value, fix_special_nodes,
-    gathered_moments_in, nodes_in_rows, planes_mut, special_node_value, CoveredNodes, Domain,
-    FluidParams, FLUID, SOLID,
+    gather_node_in, gathered_moments_in, nodes_in_rows, open_links, planes_mut, special_node_value,
+    CoveredNodes, Domain, FluidParams, FLUID, SOLID,
 };
 use lbdem_kernels::Real;
 use rayon::prelude::*;
@@ -121,6 +122,8 @@ struct CoverScratch {
     bodies: Vec<BodyCells>,
     count: Vec<u32>,
     row_span: Vec<(u32, u32)>,
+    /// Per node: fully covered (Σ ε ≥ 1); all false between calls.
+    full: Vec<bool>,
 }
 
 /// The cells one body covers: its cell range and (node, fraction) for every cell with a positive fraction, in
@@ -205,6 +208,39 @@ struct Coverage<T> {
     share_nodes: Vec<[f64; 2]>,
     exchange: Vec<[T; 2]>,
     weighting: Weighting,
+    /// Links of each covered node to nodes that are not fully covered (read by ΩΛ only).
+    links: Vec<OpenLinks>,
+}
+
+/// Fill `cov.links` from the coverage, the side conditions and the obstacle flags. `full` is a per-node
+/// scratch map, all false on entry and on return.
+fn compute_links<T: Real>(
+    cov: &mut Coverage<T>,
+    shape: &LatticeShape,
+    bc: &Boundaries<T>,
+    flags: &[u8],
+    full: &mut Vec<bool>,
+) {
+    full.resize(shape.nodes(), false);
+    let is_full = |k: usize| -> bool {
+        // The sum the collision forms (same order), compared as the collision compares it.
+        let mut eps = T::zero();
+        for s in &cov.shares[cov.offsets[k] as usize..cov.offsets[k + 1] as usize] {
+            eps += s.fraction;
+        }
+        eps >= T::one()
+    };
+    for (k, &n) in cov.nodes.iter().enumerate() {
+        full[n as usize] = is_full(k);
+    }
+    cov.links.clear();
+    cov.links.extend(cov.nodes.iter().map(|&n| {
+        let (x, y) = shape.coords(n as usize);
+        open_links(shape, bc, flags, x, y, |j| full[j])
+    }));
+    for &n in &cov.nodes {
+        full[n as usize] = false;
+    }
 }
 
 /// A disc as the fluid sees it: centre and radius (lattice units), rigid-body velocity and angular velocity.
@@ -401,7 +437,21 @@ impl<T: Real> FluidLattice<T> {
         self.reclassify();
     }
 
+    /// Recompute the open links of the covered nodes (they depend on the coverage and the obstacle flags).
+    fn refresh_links(&mut self) {
+        if let Some(cov) = self.coverage.as_mut() {
+            compute_links(
+                cov,
+                &self.shape,
+                &self.bc,
+                &self.flags,
+                &mut self.cover_scratch.full,
+            );
+        }
+    }
+
     fn reclassify(&mut self) {
+        self.refresh_links();
         let mut list = vec![0u32; self.shape.nodes()];
         let count = classify_special_nodes(&self.shape, &self.bc, &self.flags, &mut list);
         list.truncate(count);
@@ -543,6 +593,7 @@ impl<T: Real> FluidLattice<T> {
             share_nodes: Vec::new(),
             exchange: Vec::new(),
             weighting,
+            links: Vec::new(),
         });
         cov.weighting = weighting;
         cov.nodes.clear();
@@ -598,6 +649,7 @@ impl<T: Real> FluidLattice<T> {
         }
         cov.exchange.clear();
         cov.exchange.resize(total, [T::zero(); 2]);
+        compute_links(&mut cov, &s, &bc, &self.flags, &mut scratch.full);
         self.coverage = Some(cov);
     }
 
@@ -743,16 +795,23 @@ impl<T: Real> FluidLattice<T> {
             solid: self.solid_operator,
             collision: self.collision,
         });
-        let (covered, offsets, shares, exchange): (&[u32], &[u32], &[SolidShare<T>], _) =
-            match &mut self.coverage {
-                Some(c) => (
-                    &c.nodes[..],
-                    &c.offsets[..],
-                    &c.shares[..],
-                    &mut c.exchange[..],
-                ),
-                None => (&[], &[0], &[], &mut [][..]),
-            };
+        type Lists<'a, T> = (
+            &'a [u32],
+            &'a [u32],
+            &'a [SolidShare<T>],
+            &'a [OpenLinks],
+            &'a mut [[T; 2]],
+        );
+        let (covered, offsets, shares, links, exchange): Lists<'_, T> = match &mut self.coverage {
+            Some(c) => (
+                &c.nodes[..],
+                &c.offsets[..],
+                &c.shares[..],
+                &c.links[..],
+                &mut c.exchange[..],
+            ),
+            None => (&[], &[0], &[], &[], &mut [][..]),
+        };
         // Every entry is rewritten below (phase 1 for the special covered nodes, phase 2 for the others).
         covered_vals.resize(covered.len(), None);
         // The covered nodes, their values and their exchange entries, split along the bands of rows.
@@ -795,8 +854,16 @@ impl<T: Real> FluidLattice<T> {
                         if mask[n] {
                             let (a, b) = (offsets[k] as usize, offsets[k + 1] as usize);
                             let ex = &mut ex[a - first..b - first];
-                            *v =
-                                covered_node_value(&domain, buf, layout, psm, n, &shares[a..b], ex);
+                            *v = covered_node_value(
+                                &domain,
+                                buf,
+                                layout,
+                                psm,
+                                n,
+                                &shares[a..b],
+                                links[k],
+                                ex,
+                            );
                         }
                     }
                 });
@@ -831,7 +898,8 @@ impl<T: Real> FluidLattice<T> {
                             let n = covered[k] as usize;
                             let mut f = load_from_rows(band, kind, y0, n % nx, n / nx);
                             let (a, b) = (offsets[k] as usize, offsets[k + 1] as usize);
-                            psm_collide(&mut f, psm, &shares[a..b], &mut ex[a - first..b - first]);
+                            let ex = &mut ex[a - first..b - first];
+                            psm_collide_links(&mut f, psm, &shares[a..b], links[k], ex);
                             *v = Some(f);
                         }
                     }
@@ -913,7 +981,13 @@ impl<T: Real> FluidLattice<T> {
         // Split the covered nodes and their exchange buffer along the same bands.
         type Band<'a, T> = (usize, [&'a mut [T]; Q], (usize, usize), &'a mut [[T; 2]]);
         let mut work: Vec<Band<'_, T>> = Vec::with_capacity(bands);
-        type Static<'a, T> = (&'a [u32], &'a [u32], &'a [SolidShare<T>], Weighting);
+        type Static<'a, T> = (
+            &'a [u32],
+            &'a [u32],
+            &'a [SolidShare<T>],
+            Weighting,
+            &'a [OpenLinks],
+        );
         let (cov, mut exchange_rest): (Option<Static<'_, T>>, &mut [[T; 2]]) =
             match &mut self.coverage {
                 Some(Coverage {
@@ -922,15 +996,22 @@ impl<T: Real> FluidLattice<T> {
                     shares,
                     exchange,
                     weighting,
+                    links,
                     ..
                 }) => (
-                    Some((&nodes[..], &offsets[..], &shares[..], *weighting)),
+                    Some((
+                        &nodes[..],
+                        &offsets[..],
+                        &shares[..],
+                        *weighting,
+                        &links[..],
+                    )),
                     &mut exchange[..],
                 ),
                 None => (None, &mut []),
             };
         let (cov_nodes, offsets): (&[u32], &[u32]) = match cov {
-            Some((n, o, _, _)) => (n, o),
+            Some((n, o, _, _, _)) => (n, o),
             None => (&[], &[0]),
         };
         let mut lo = 0usize;
@@ -960,12 +1041,13 @@ impl<T: Real> FluidLattice<T> {
                 let sp = nodes_in_rows(&shape, special, y0, y1);
                 bulk_band_exec(simd, &shape, src, &mut band, y0, y1, &params, &collision);
                 fix_special_nodes(&domain, src, &mut band, y0, &params, &collision, sp);
-                if let (Some((nodes, offsets, shares, _)), Some(psm)) = (cov, psm.as_ref()) {
+                if let (Some((nodes, offsets, shares, _, links)), Some(psm)) = (cov, psm.as_ref()) {
                     if hi > lo {
                         let covered = CoveredNodes {
                             nodes: &nodes[lo..hi],
                             offsets: &offsets[lo..=hi],
                             shares,
+                            links: &links[lo..hi],
                         };
                         collide_covered_nodes(&domain, src, &mut band, y0, psm, covered, exchange);
                     }
@@ -974,7 +1056,10 @@ impl<T: Real> FluidLattice<T> {
         self.first_is_current = !self.first_is_current;
     }
 
-    /// Density and velocity of every node (row-major), as the next collision sees them.
+    /// Density and velocity of every node (row-major), as the next collision sees them: (Σ f c + F/2)/ρ, and at
+    /// nodes covered under ΩΛ ([`SolidOperator::LambdaConsistent`]) the velocity its collision uses, with the
+    /// solids' friction (the velocity that makes measured fluxes independent of τ; the solid velocity at fully
+    /// covered nodes).
     pub fn moments(&self) -> (Vec<T>, Vec<[T; 2]>) {
         let n = self.shape.nodes();
         let mut rho = vec![T::zero(); n];
@@ -989,6 +1074,33 @@ impl<T: Real> FluidLattice<T> {
             &mut rho,
             &mut u,
         );
+        if let (Some(c), SolidOperator::LambdaConsistent) = (&self.coverage, self.solid_operator) {
+            let psm = PsmParams {
+                tau: self.params.tau,
+                weighting: c.weighting,
+                force: self.params.force,
+                solid: self.solid_operator,
+                collision: self.collision,
+            };
+            for (k, &node) in c.nodes.iter().enumerate() {
+                let node = node as usize;
+                if self.flags[node] == SOLID {
+                    continue;
+                }
+                let (x, y) = self.shape.coords(node);
+                let f = gather_node_in(
+                    &self.shape,
+                    self.current(),
+                    self.layout,
+                    &self.bc,
+                    &self.flags,
+                    x,
+                    y,
+                );
+                let shares = &c.shares[c.offsets[k] as usize..c.offsets[k + 1] as usize];
+                u[node] = psm_velocity(&f, &psm, shares).1;
+            }
+        }
         (rho, u)
     }
 

@@ -155,7 +155,16 @@ pub fn trt(f: &Populations, tau_plus: f64, magic: f64) -> Populations {
 /// Two-relaxation-time collision with Guo's source split into even and odd parts, u with the half-force
 /// shift: f_i − (f_i⁺ − e_i⁺)/τ⁺ − (f_i⁻ − e_i⁻)/τ⁻ + (1 − 1/(2τ⁺)) G_i⁺ + (1 − 1/(2τ⁻)) G_i⁻.
 pub fn trt_forced(f: &Populations, tau_plus: f64, magic: f64, force: [f64; 2]) -> Populations {
-    let tau_m = tau_minus(tau_plus, magic);
+    trt_forced_times(f, tau_plus, tau_minus(tau_plus, magic), force)
+}
+
+/// [`trt_forced`] with the two relaxation times given directly.
+pub fn trt_forced_times(
+    f: &Populations,
+    tau_plus: f64,
+    tau_m: f64,
+    force: [f64; 2],
+) -> Populations {
     let (rho, u) = macroscopic(f, force);
     let feq = equilibrium(rho, u);
     // Guo's source without its prefactor: G_i = w_i [3 (c_i − u) + 9 (c_i·u) c_i]·F.
@@ -341,6 +350,121 @@ pub fn psm_with_collision(
         exchange.push([-given_to_fluid[0], -given_to_fluid[1]]);
     }
     (out, exchange)
+}
+
+/// ΩΛ's friction constant κ (`lbdem_kernels::fluid::collide::LAMBDA_FRICTION`, restated).
+pub const LAMBDA_FRICTION: f64 = 0.95;
+
+/// The magic-parameter-consistent partially saturated collision ΩΛ of one node (see the kernels'
+/// `lambda_collide` for the derivation), written from its definition. `magic` = `None` is BGK (Λ⁻ = Λ⁺);
+/// `open[i]` tells whether the neighbour x + c_i is not fully covered (read at fully covered nodes only).
+///
+/// * Σ ε_s ≤ 0: the fluid collision.
+/// * Σ ε_s ≥ 1: for each solid s, P_i = f_ī + 6 w_i ρ c_i·u_s on open links; the other directions (the rest
+///   direction among them) get the remaining mass ρ − Σ_open P_i in proportion to f^eq(1, u_s); the node takes
+///   Σ_s (ε_s/Σε) P_s and solid s receives −(ε_s/Σε) Σ_i c_i (P_{s,i} − f_i).
+/// * otherwise, with Λ⁺ = τ − ½, Λ⁻ = τ⁻ − ½, B = ε (or ε√(Λ⁺Λ⁻)/((1 − ε) + √(Λ⁺Λ⁻)) for the NT weighting):
+///   TRT with τ⁺_loc = ½ + Λ⁺/(1 − B), τ⁻_loc = ½ + Λ⁻(1 − B) and the force F = (1 − B) F_body + Σ_s F_s,
+///   F_s = −κ Λ⁺ B (ε_s/Σε) ρ (u − u_s), u the velocity of that forced collision, u = (Σ f c + F/2)/ρ (solved:
+///   u (1 + κΛ⁺B/2) = (Σ f c + (1 − B) F_body/2)/ρ + Σ_s κΛ⁺B (ε_s/Σε) u_s/2); solid s receives −F_s.
+pub fn psm_lambda(
+    f: &Populations,
+    tau: f64,
+    magic: Option<f64>,
+    kind: Weighting,
+    force: [f64; 2],
+    solids: &[Solid],
+    open: [bool; Q],
+) -> (Populations, Vec<[f64; 2]>) {
+    let eps: f64 = solids.iter().map(|s| s.fraction).sum();
+    if eps <= 0.0 {
+        return (
+            fluid_collision(f, tau, magic, force),
+            vec![[0.0, 0.0]; solids.len()],
+        );
+    }
+    let rho = density(f);
+    if eps >= 1.0 {
+        let mut out = [0.0; Q];
+        let mut exchange = Vec::new();
+        for s in solids {
+            let share = s.fraction / eps;
+            let shape = equilibrium(1.0, s.velocity);
+            let mut p = [0.0; Q];
+            let is_open = |i: usize| i != 0 && open[i];
+            for i in (0..Q).filter(|&i| is_open(i)) {
+                let cu = c(i)[0] * s.velocity[0] + c(i)[1] * s.velocity[1];
+                p[i] = f[OPPOSITE[i]] + 6.0 * W[i] * rho * cu;
+            }
+            let reflected: f64 = (0..Q).filter(|&i| is_open(i)).map(|i| p[i]).sum();
+            let closed_weight: f64 = (0..Q).filter(|&i| !is_open(i)).map(|i| shape[i]).sum();
+            for i in (0..Q).filter(|&i| !is_open(i)) {
+                p[i] = (rho - reflected) * shape[i] / closed_weight;
+            }
+            let mut handed = [0.0; 2];
+            for i in 0..Q {
+                out[i] += share * p[i];
+                handed[0] -= share * (p[i] - f[i]) * c(i)[0];
+                handed[1] -= share * (p[i] - f[i]) * c(i)[1];
+            }
+            exchange.push(handed);
+        }
+        return (out, exchange);
+    }
+    let lambda_plus = tau - 0.5;
+    let lambda_minus = match magic {
+        None => lambda_plus,
+        Some(m) => tau_minus(tau, m) - 0.5,
+    };
+    let b = match kind {
+        Weighting::SolidFraction => eps,
+        Weighting::NobleTorczynski => {
+            let a = (lambda_plus * lambda_minus).sqrt();
+            eps * a / ((1.0 - eps) + a)
+        }
+    };
+    let beta = LAMBDA_FRICTION * lambda_plus * b;
+    let body = [(1.0 - b) * force[0], (1.0 - b) * force[1]];
+    let j = momentum(f);
+    let mut u = [0.0; 2];
+    for a in 0..2 {
+        let pull: f64 = solids
+            .iter()
+            .map(|s| beta * s.fraction / eps * s.velocity[a] / 2.0)
+            .sum();
+        u[a] = ((j[a] + body[a] / 2.0) / rho + pull) / (1.0 + beta / 2.0);
+    }
+    let mut total = body;
+    let mut exchange = Vec::new();
+    for s in solids {
+        let fs = [
+            -beta * s.fraction / eps * rho * (u[0] - s.velocity[0]),
+            -beta * s.fraction / eps * rho * (u[1] - s.velocity[1]),
+        ];
+        total[0] += fs[0];
+        total[1] += fs[1];
+        exchange.push([-fs[0], -fs[1]]);
+    }
+    let post = trt_forced_times(
+        f,
+        0.5 + lambda_plus / (1.0 - b),
+        0.5 + lambda_minus * (1.0 - b),
+        total,
+    );
+    (post, exchange)
+}
+
+/// The open links of node (x, y) for ΩΛ: `open[i]` when x + c_i is inside the lattice (wrapping across
+/// periodic sides), not an obstacle node and not fully covered (`full[node]`). Links leaving through a
+/// non-periodic side are closed.
+pub fn open_links(lat: &Lattice, sides: &Sides, full: &[bool], x: usize, y: usize) -> [bool; Q] {
+    let mut open = [false; Q];
+    for (q, o) in open.iter_mut().enumerate().skip(1) {
+        if let Some(j) = lat.destination(x, y, q, sides) {
+            *o = !lat.solid[j] && !full[j];
+        }
+    }
+    open
 }
 
 /// The sides of the rectangle.
@@ -535,6 +659,8 @@ pub struct Params {
     pub weighting: Weighting,
     /// Fluid collision: BGK (`None`) or TRT with this magic parameter Λ.
     pub magic: Option<f64>,
+    /// Covered nodes use ΩΛ ([`psm_lambda`]) instead of Ω₁.
+    pub lambda_consistent: bool,
 }
 
 impl Lattice {
@@ -690,9 +816,28 @@ pub fn step(
         };
     }
     let mut forces = Vec::with_capacity(covered.len());
+    let mut full = vec![false; lat.f.len()];
+    for cov in covered {
+        full[cov.node] = cov.solids.iter().map(|s| s.fraction).sum::<f64>() >= 1.0;
+    }
     for cov in covered {
         if lat.solid[cov.node] {
             forces.push(vec![[0.0, 0.0]; cov.solids.len()]);
+            continue;
+        }
+        if params.lambda_consistent {
+            let (x, y) = (cov.node % lat.nx, cov.node / lat.nx);
+            let (f, ex) = psm_lambda(
+                &streamed[cov.node],
+                params.tau,
+                params.magic,
+                params.weighting,
+                params.force,
+                &cov.solids,
+                open_links(lat, sides, &full, x, y),
+            );
+            next.f[cov.node] = f;
+            forces.push(ex);
             continue;
         }
         let (f, ex) = psm_with_collision(

@@ -19,16 +19,16 @@
 //!   band splitting.
 use lbdem_kernels::fluid::boundary::{zou_he, zou_he_corner, Boundaries, SideCondition};
 use lbdem_kernels::fluid::collide::{
-    bgk_collide, bgk_collide_forced, bgk_collide_slices, psm_collide, trt_collide,
-    trt_collide_forced, Collision, CollisionError, PsmParams, SolidOperator, SolidShare, Trt,
-    Weighting,
+    bgk_collide, bgk_collide_forced, bgk_collide_slices, fluid_collide, psm_collide,
+    psm_collide_links, psm_velocity, trt_collide, trt_collide_forced, Collision, CollisionError,
+    OpenLinks, PsmParams, SolidOperator, SolidShare, Trt, Weighting, ALL_LINKS_OPEN,
 };
 use lbdem_kernels::fluid::d2q9::{density, equilibrium, momentum, second_moment, OPPOSITE, Q};
 use lbdem_kernels::fluid::lattice::{LatticeShape, Side};
 use lbdem_kernels::fluid::step::{
     band_mut, classify_special_nodes, collide_covered_nodes, gather_node, gathered_moments,
-    nodes_in_rows, planes, planes_mut, step_band, stream_periodic, CoveredNodes, Domain,
-    FluidParams, FLUID, SOLID,
+    nodes_in_rows, open_links, planes, planes_mut, step_band, stream_periodic, CoveredNodes,
+    Domain, FluidParams, FLUID, SOLID,
 };
 use lbdem_kernels::Real;
 use lbdem_reference::analytic;
@@ -457,6 +457,8 @@ struct Problem {
     covered: Vec<(u32, Vec<SolidShare<f64>>)>,
     /// Fluid collision: BGK (`None`) or TRT with this magic parameter Λ.
     magic: Option<f64>,
+    /// Covered nodes use ΩΛ (else Ω₁).
+    lambda: bool,
 }
 
 fn random_side(rng: &mut SplitMix) -> SideCondition<f64> {
@@ -531,6 +533,7 @@ fn random_problem(nx: usize, ny: usize, seed: u64, p_solid: f64, p_covered: f64)
         weighting,
         covered,
         magic: None,
+        lambda: false,
     }
 }
 
@@ -625,7 +628,11 @@ fn kernel_step<T: Real>(
         tau,
         weighting: p.weighting,
         force,
-        solid: SolidOperator::NonEquilibriumBounceBack,
+        solid: if p.lambda {
+            SolidOperator::LambdaConsistent
+        } else {
+            SolidOperator::NonEquilibriumBounceBack
+        },
         collision,
     };
     // Compressed-row coverage.
@@ -639,6 +646,22 @@ fn kernel_step<T: Real>(
         }));
         offsets.push(shares.len() as u32);
     }
+    // Open links (ΩΛ): fully covered = the shares' fractions, summed in the collision's order, reach 1.
+    let mut full = vec![false; shape.nodes()];
+    for (k, &n) in nodes.iter().enumerate() {
+        let mut eps = T::zero();
+        for s in &shares[offsets[k] as usize..offsets[k + 1] as usize] {
+            eps += s.fraction;
+        }
+        full[n as usize] = eps >= T::one();
+    }
+    let links: Vec<OpenLinks> = nodes
+        .iter()
+        .map(|&n| {
+            let (x, y) = shape.coords(n as usize);
+            open_links(&shape, &bc, &flags, x, y, |j| full[j])
+        })
+        .collect();
     let mut exchange = vec![[T::nan(); 2]; shares.len()];
     let mut rows = vec![0];
     rows.extend_from_slice(cuts);
@@ -664,6 +687,7 @@ fn kernel_step<T: Real>(
                 nodes: &nodes[lo..hi],
                 offsets: &offsets[lo..=hi],
                 shares: &shares,
+                links: &links[lo..hi],
             };
             let (a, b) = (offsets[lo] as usize, offsets[hi] as usize);
             collide_covered_nodes(
@@ -690,6 +714,7 @@ fn reference_step(p: &Problem, with_coverage: bool) -> (reference::Lattice, Vec<
         force: p.force,
         weighting: to_reference_weighting(p.weighting),
         magic: p.magic,
+        lambda_consistent: p.lambda,
     };
     let covered: Vec<reference::Covered> = if with_coverage {
         p.covered
@@ -1467,5 +1492,178 @@ fn trt_poiseuille_error_does_not_depend_on_tau() {
             // (16Λ − 3)/24 · g/ν over g H²/(8ν) = (16Λ − 3)/(3H²): 1/192 at Λ = 1/4, H = 8.
             assert!((hi - 1.0 / 192.0).abs() <= 1e-10, "{errors:?}");
         }
+    }
+}
+
+// ---------------------------------------------------------------------------------------------------------
+// ΩΛ: the magic-parameter-consistent partially saturated operator
+// ---------------------------------------------------------------------------------------------------------
+
+fn open_mask() -> impl Strategy<Value = OpenLinks> {
+    any::<u16>().prop_map(|m| m & ALL_LINKS_OPEN)
+}
+
+fn open_bools(m: OpenLinks) -> [bool; Q] {
+    core::array::from_fn(|i| i != 0 && m & (1 << i) != 0)
+}
+
+fn fluid_choice() -> impl Strategy<Value = Option<f64>> {
+    prop_oneof![Just(None), magic().prop_map(Some)]
+}
+
+fn collision_of(magic: Option<f64>) -> Collision<f64> {
+    magic.map_or(Collision::Bgk, trt)
+}
+
+fn lambda_params(tau: f64, w: Weighting, force: [f64; 2], magic: Option<f64>) -> PsmParams<f64> {
+    PsmParams {
+        tau,
+        weighting: w,
+        force,
+        solid: SolidOperator::LambdaConsistent,
+        collision: collision_of(magic),
+    }
+}
+
+proptest! {
+    /// ΩΛ conserves mass; the fluid's momentum changes by (1 − B) F minus what the solids receive (momentum is
+    /// exchanged, never created); it equals the reference (written from the definition), exchange included,
+    /// for BGK and TRT, both weightings, partly and fully covered nodes (shares summing past 1 included) and
+    /// any set of open links.
+    #[test]
+    fn lambda_operator_exchanges_momentum_with_the_solids(
+        f in node_populations(), tau in tau(), magic in fluid_choice(), shares in shares(), w in weighting(),
+        forced in any::<bool>(), force in force(), open in open_mask(),
+    ) {
+        let force = if forced { force } else { [0.0; 2] };
+        let params = lambda_params(tau, w, force, magic);
+        let mut g = f;
+        let mut exchange = vec![[f64::NAN; 2]; shares.len()];
+        let b = psm_collide_links(&mut g, &params, &shares, open, &mut exchange);
+        prop_assert!((0.0..=1.0).contains(&b));
+        let tol = ROUNDOFF * scale(&f);
+        prop_assert!((density(&g) - density(&f)).abs() <= tol);
+        let (j0, j1) = (momentum(&f), momentum(&g));
+        for a in 0..2 {
+            let handed: f64 = exchange.iter().map(|e| e[a]).sum();
+            prop_assert!((j1[a] - j0[a] - ((1.0 - b) * force[a] - handed)).abs() <= tol, "axis {a}");
+        }
+        let (r, ex) = reference::psm_lambda(
+            &f, tau, magic, to_reference_weighting(w), force, &to_reference_solids(&shares), open_bools(open),
+        );
+        prop_assert!(max_abs_diff(&g, &r) <= ORACLE * scale(&f), "{g:?}\nvs {r:?}");
+        for (k, e) in exchange.iter().zip(&ex) {
+            prop_assert!(max_abs_diff(k, e) <= ORACLE * scale(&f));
+        }
+    }
+
+    /// The velocity ΩΛ reports ([`psm_velocity`], what fluxes are measured with) is the trapezoidal velocity of
+    /// its update at a partly covered node, (pre + post momentum)/(2ρ), and the solid's velocity at a fully
+    /// covered one.
+    #[test]
+    fn lambda_velocity_is_the_velocity_of_the_update(
+        f in node_populations(), tau in tau(), magic in fluid_choice(), shares in shares(), w in weighting(),
+        forced in any::<bool>(), force in force(),
+    ) {
+        let force = if forced { force } else { [0.0; 2] };
+        let params = lambda_params(tau, w, force, magic);
+        let (rho, u) = psm_velocity(&f, &params, &shares);
+        let mut g = f;
+        let mut exchange = vec![[0.0; 2]; shares.len()];
+        psm_collide(&mut g, &params, &shares, &mut exchange);
+        let eps: f64 = shares.iter().map(|s| s.fraction).sum();
+        prop_assert_eq!(rho, density(&f));
+        let tol = ROUNDOFF * scale(&f);
+        if eps >= 1.0 {
+            for (a, ua) in u.iter().enumerate() {
+                let want: f64 = shares.iter().map(|s| s.fraction / eps * s.velocity[a]).sum();
+                prop_assert!((ua - want).abs() <= tol);
+            }
+        } else if eps > 0.0 {
+            let (j0, j1) = (momentum(&f), momentum(&g));
+            for a in 0..2 {
+                prop_assert!((u[a] - 0.5 * (j0[a] + j1[a]) / rho).abs() <= tol, "axis {a}");
+            }
+        }
+    }
+
+    /// ΩΛ with every solid fraction zero is bitwise the fluid collision and hands nothing over.
+    #[test]
+    fn lambda_operator_with_zero_solid_fraction_is_bitwise_the_fluid_collision(
+        f in node_populations(), tau in tau(), magic in fluid_choice(), n in 0usize..=3, u_s in velocity(),
+        forced in any::<bool>(), force in force(), open in open_mask(),
+    ) {
+        let force = if forced { force } else { [0.0; 2] };
+        let params = lambda_params(tau, Weighting::SolidFraction, force, magic);
+        let shares = vec![SolidShare { fraction: 0.0, velocity: u_s }; n];
+        let mut exchange = vec![[f64::NAN; 2]; n];
+        let mut g = f;
+        prop_assert_eq!(psm_collide_links(&mut g, &params, &shares, open, &mut exchange), 0.0);
+        let mut h = f;
+        let c = collision_of(magic);
+        fluid_collide(&mut h, &c, c.rates(tau).expect("valid rates"), force);
+        prop_assert_eq!(g.map(f64::to_bits), h.map(f64::to_bits));
+        prop_assert!(exchange.iter().all(|e| *e == [0.0, 0.0]));
+    }
+
+    /// A fully covered ΩΛ node with no open link (inside a solid) leaves at the solid's equilibrium,
+    /// f^eq(ρ, u_s): the fluid inside a solid moves with it (what keeps free grains stable). With every link open
+    /// and the solid at rest it is pure bounce-back, f_i ← f_ī (the rest population kept), whatever τ.
+    #[test]
+    fn lambda_operator_at_full_cover_moves_with_the_solid_or_bounces_back(
+        f in node_populations(), tau in tau(), magic in fluid_choice(), u_s in velocity(),
+    ) {
+        let params = lambda_params(tau, Weighting::SolidFraction, [0.0; 2], magic);
+        let tol = ROUNDOFF * scale(&f);
+        let mut g = f;
+        let mut ex = [[0.0; 2]; 1];
+        psm_collide_links(&mut g, &params, &[SolidShare { fraction: 1.0, velocity: u_s }], 0, &mut ex);
+        let want = equilibrium(density(&f), u_s);
+        prop_assert!(max_abs_diff(&g, &want) <= tol, "{g:?} vs {want:?}");
+        let mut h = f;
+        psm_collide_links(&mut h, &params, &[SolidShare { fraction: 1.0, velocity: [0.0; 2] }], ALL_LINKS_OPEN, &mut ex);
+        // The rest population gets the mass that remains, ρ − Σ_{i≠0} f_ī = f₀ up to roundoff.
+        for i in 0..Q {
+            prop_assert!((h[i] - f[OPPOSITE[i]]).abs() <= tol, "direction {i}");
+        }
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(128))]
+
+    /// A whole step with ΩΛ at the covered nodes (open links from the coverage, the obstacles and the sides)
+    /// equals the reference step, in f64 and f32, on random lattices with random coverage (fractions often
+    /// exactly 1, and sums past 1, so fully covered nodes with every mix of open links occur) and TRT or BGK.
+    #[test]
+    fn lambda_step_matches_the_reference(nx in 1usize..=12, ny in 1usize..=12, seed in any::<u64>(), bgk in any::<bool>()) {
+        let mut p = random_trt_problem(nx, ny, seed, 0.1, 0.5);
+        p.lambda = true;
+        if bgk {
+            p.magic = None;
+        }
+        compare_steps::<f64>(&p, true, ORACLE)?;
+        compare_steps::<f32>(&p, true, ORACLE_F32)?;
+    }
+
+    /// ΩΛ updated as several bands (as threads do) is bitwise the one-band update, exchange included.
+    #[test]
+    fn lambda_bands_are_independent(
+        nx in 1usize..=12, ny in 1usize..=12, seed in any::<u64>(),
+        cuts in prop::collection::vec(0usize..=12, 0..4),
+    ) {
+        let mut p = random_trt_problem(nx, ny, seed, 0.1, 0.5);
+        p.lambda = true;
+        let mut cuts: Vec<usize> = cuts.into_iter().map(|c| c.min(ny)).collect();
+        cuts.sort_unstable();
+        let (one, ex1) = kernel_step::<f64>(&p, &[], true);
+        let (many, ex2) = kernel_step::<f64>(&p, &cuts, true);
+        for (a, b) in one.iter().zip(&many) {
+            prop_assert_eq!(a.map(f64::to_bits), b.map(f64::to_bits));
+        }
+        prop_assert_eq!(
+            ex1.iter().flatten().map(|v| v.to_bits()).collect::<Vec<_>>(),
+            ex2.iter().flatten().map(|v| v.to_bits()).collect::<Vec<_>>()
+        );
     }
 }

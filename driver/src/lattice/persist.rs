@@ -77,6 +77,7 @@ impl<T: Real> Persist for FluidLattice<T> {
             0 => None,
             _ => Some(load_coverage(d, &lattice.shape)?),
         };
+        lattice.refresh_links();
         let collision = match d.tag("fluid collision", 2)? {
             0 => Collision::Bgk,
             _ => {
@@ -132,5 +133,6 @@ fn load_coverage<T: Real>(d: &mut Decoder<'_>, shape: &LatticeShape) -> Result<C
         share_nodes,
         exchange,
         weighting,
+        links: Vec::new(),
     })
 }

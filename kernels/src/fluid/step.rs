@@ -22,8 +22,8 @@
 use super::aa::{load_post_collision, Layout};
 use super::boundary::{zou_he, zou_he_corner, Boundaries, SideCondition};
 use super::collide::{
-    bgk_collide, bgk_collide_forced, fluid_collide, psm_collide, trt_collide, trt_collide_forced,
-    Collision, PsmParams, SolidShare,
+    bgk_collide, bgk_collide_forced, fluid_collide, psm_collide_links, trt_collide,
+    trt_collide_forced, Collision, OpenLinks, PsmParams, SolidShare,
 };
 use super::d2q9::{density, equilibrium, OPPOSITE, Q, VELOCITIES};
 use super::lattice::{wrap_row, LatticeShape, Neighbour, Side};
@@ -490,7 +490,8 @@ pub fn fix_special_nodes<T: Real>(
 }
 
 /// Nodes covered by moving solids, in compressed-row form: node `nodes[k]` is covered by the shares
-/// `shares[offsets[k] as usize .. offsets[k + 1] as usize]`.
+/// `shares[offsets[k] as usize .. offsets[k + 1] as usize]`, and its links to nodes that are not fully covered
+/// are `links[k]` (read by the ΩΛ operator only; see [`OpenLinks`]).
 #[derive(Clone, Copy, Debug)]
 pub struct CoveredNodes<'a, T> {
     /// Covered node indices, increasing.
@@ -499,11 +500,13 @@ pub struct CoveredNodes<'a, T> {
     pub offsets: &'a [u32],
     /// Every share of the lattice.
     pub shares: &'a [SolidShare<T>],
+    /// Open links of each covered node (same length as `nodes`).
+    pub links: &'a [OpenLinks],
 }
 
 /// The new post-collision populations of covered node `n` from `src` in `layout`: the general gather and the
-/// partially-saturated collision with `shares`, the momentum handed to each share written to `exchange`. A
-/// covered solid obstacle node is left alone (`None`, zero exchange).
+/// partially-saturated collision with `shares` (and the node's open links `open`), the momentum handed to each
+/// share written to `exchange`. A covered solid obstacle node is left alone (`None`, zero exchange).
 #[inline]
 #[allow(clippy::too_many_arguments)]
 pub fn covered_node_value<T: Real>(
@@ -513,6 +516,7 @@ pub fn covered_node_value<T: Real>(
     params: &PsmParams<T>,
     n: usize,
     shares: &[SolidShare<T>],
+    open: OpenLinks,
     exchange: &mut [[T; 2]],
 ) -> Option<[T; Q]> {
     let (shape, bc, flags) = (&domain.shape, &domain.bc, domain.flags);
@@ -524,7 +528,7 @@ pub fn covered_node_value<T: Real>(
     }
     let (x, y) = shape.coords(n);
     let mut f = gather_node_in(shape, src, layout, bc, flags, x, y);
-    psm_collide(&mut f, params, shares, exchange);
+    psm_collide_links(&mut f, params, shares, open, exchange);
     Some(f)
 }
 
@@ -547,7 +551,10 @@ pub fn collide_covered_nodes<T: Real>(
         let (a, b) = (covered.offsets[k] as usize, covered.offsets[k + 1] as usize);
         let ex = &mut exchange[a - first..b - first];
         let shares = &covered.shares[a..b];
-        if let Some(f) = covered_node_value(domain, src, Layout::Collided, params, n, shares, ex) {
+        let open = covered.links[k];
+        if let Some(f) =
+            covered_node_value(domain, src, Layout::Collided, params, n, shares, open, ex)
+        {
             for q in 0..Q {
                 dst[q][n - base] = f[q];
             }
@@ -616,4 +623,28 @@ pub fn nodes_in_rows<'a>(
     let lo = nodes.partition_point(|&n| n < a);
     let hi = nodes.partition_point(|&n| n < b);
     &nodes[lo..hi]
+}
+
+/// The open links ([`OpenLinks`]) of node (x, y): bit i set when the neighbour x + c_i is inside the lattice
+/// (periodic wrap where the axis is periodic), not a solid obstacle node and not fully covered by the moving
+/// solids (`full(j)` false). Neighbours outside the lattice lie behind a wall (a covered node is never on a
+/// Zou–He side), so their links are closed.
+pub fn open_links<T: Real>(
+    shape: &LatticeShape,
+    bc: &Boundaries<T>,
+    flags: &[u8],
+    x: usize,
+    y: usize,
+    full: impl Fn(usize) -> bool,
+) -> OpenLinks {
+    let periodic = bc.periodic_axes();
+    let mut open: OpenLinks = 0;
+    for q in 1..Q {
+        if let Neighbour::Node(j) = shape.neighbour(x, y, q, periodic) {
+            if flags[j] != SOLID && !full(j) {
+                open |= 1 << q;
+            }
+        }
+    }
+    open
 }
