@@ -653,6 +653,75 @@ impl<T: Real> FluidLattice<T> {
         self.coverage = Some(cov);
     }
 
+    /// Cover the lattice with one solid (body 0) given cell by cell: the fraction `fraction(x, y)` of each cell it
+    /// covers and its velocity `velocity(x, y)` there (lattice units), for solids that are not discs or ellipses
+    /// (a slab, a half-space). Replaces any previous coverage; cells with a zero fraction and nodes on Zou–He
+    /// sides are not covered (as in [`FluidLattice::cover_with_bodies`]). Its force and torque are body 0's in
+    /// [`FluidLattice::solid_forces_and_torques`]. Refuses a fraction outside [0, 1] or a velocity that is not
+    /// finite or not below the lattice speed, naming the cell.
+    pub fn cover_with_field(
+        &mut self,
+        fraction: impl Fn(usize, usize) -> f64,
+        velocity: impl Fn(usize, usize) -> [f64; 2],
+        weighting: Weighting,
+    ) -> Result<()> {
+        let s = self.shape;
+        let mut cov = Coverage {
+            nodes: Vec::new(),
+            offsets: vec![0],
+            shares: Vec::new(),
+            owners: Vec::new(),
+            share_nodes: Vec::new(),
+            exchange: Vec::new(),
+            weighting,
+            links: Vec::new(),
+        };
+        for y in 0..s.ny {
+            for x in 0..s.nx {
+                let e = fraction(x, y);
+                if !(0.0..=1.0).contains(&e) {
+                    return Err(LbdemError::field(
+                        "solid fraction",
+                        format!("{e} at node ({x}, {y})"),
+                        "must lie in [0, 1]",
+                        "give the fraction of the cell the solid covers",
+                    ));
+                }
+                let v = velocity(x, y);
+                if !(v[0].is_finite() && v[1].is_finite() && v[0].abs() < 1.0 && v[1].abs() < 1.0) {
+                    return Err(LbdemError::field(
+                        "solid velocity",
+                        format!("{v:?} at node ({x}, {y})"),
+                        "must be finite and below the lattice speed 1",
+                        "convert the velocity to lattice units (u dt/h)",
+                    ));
+                }
+                if e == 0.0 || on_zou_he_side(&s, &self.bc, x, y) {
+                    continue;
+                }
+                cov.nodes.push(s.index(x, y) as u32);
+                cov.shares.push(SolidShare {
+                    fraction: T::lit(e),
+                    velocity: [T::lit(v[0]), T::lit(v[1])],
+                });
+                cov.offsets.push(cov.shares.len() as u32);
+                cov.owners.push(0);
+                cov.share_nodes.push([x as f64, y as f64]);
+            }
+        }
+        cov.exchange = vec![[T::zero(); 2]; cov.shares.len()];
+        self.cover_scratch = CoverScratch::default();
+        compute_links(
+            &mut cov,
+            &s,
+            &self.bc,
+            &self.flags,
+            &mut self.cover_scratch.full,
+        );
+        self.coverage = Some(cov);
+        Ok(())
+    }
+
     /// Change the prescribed density of a Zou–He pressure side (e.g. the boundary pressure drop of the fracture
     /// test at t = 0). The side must already be a pressure side: its node classification does not change.
     pub fn set_side_density(&mut self, side: Side, density: T) -> Result<()> {
