@@ -700,16 +700,25 @@ impl<T: Real> Persist for SideCondition<T> {
                 e.u8(3);
                 e.real2(velocity);
             }
+            SideCondition::MovingWall { velocity } => {
+                e.u8(4);
+                e.real2(velocity);
+            }
+            SideCondition::VelocityProfile => e.u8(5),
         }
     }
     fn load(d: &mut Decoder<'_>) -> Result<Self> {
-        Ok(match d.tag("side condition", 4)? {
+        Ok(match d.tag("side condition", 6)? {
             0 => SideCondition::Periodic,
             1 => SideCondition::Wall,
             2 => SideCondition::Pressure { density: d.real()? },
-            _ => SideCondition::Velocity {
+            3 => SideCondition::Velocity {
                 velocity: d.real2()?,
             },
+            4 => SideCondition::MovingWall {
+                velocity: d.real2()?,
+            },
+            _ => SideCondition::VelocityProfile,
         })
     }
 }

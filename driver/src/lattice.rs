@@ -13,7 +13,7 @@ use lbdem_kernels::fluid::aa::{
     load_from_rows, plane_row, store_in_rows, store_post_collision_in_plane, to_collided, AaStep,
     Layout,
 };
-use lbdem_kernels::fluid::boundary::{Boundaries, SideCondition};
+use lbdem_kernels::fluid::boundary::{Boundaries, SideCondition, SideProfiles};
 use lbdem_kernels::fluid::collide::{
     psm_collide_links, psm_velocity, Collision, OpenLinks, PsmParams, SolidOperator, SolidShare,
     Weighting,
@@ -106,6 +106,9 @@ pub struct FluidLattice<T: Real> {
     solid_operator: SolidOperator,
     /// The fluid collision (BGK unless [`FluidLattice::set_collision`] chose TRT).
     collision: Collision<T>,
+    /// Velocity profiles of [`SideCondition::VelocityProfile`] sides (west, east, south, north; empty for other
+    /// sides, zero velocity until [`FluidLattice::set_side_profile`]).
+    profiles: [Vec<[T; 2]>; 4],
     simd: SimdLevel,
     streaming: Streaming,
     /// Layout of the current buffer (always [`Layout::Collided`] with the two-lattice scheme).
@@ -180,6 +183,16 @@ impl BodyCells {
                 }
             }
         }
+    }
+}
+
+/// The kernel's view of the lattice's side profiles.
+fn side_profiles<T: Real>(p: &[Vec<[T; 2]>; 4]) -> SideProfiles<'_, T> {
+    SideProfiles {
+        west: &p[0],
+        east: &p[1],
+        south: &p[2],
+        north: &p[3],
     }
 }
 
@@ -301,6 +314,15 @@ impl<T: Real> FluidLattice<T> {
             cover_scratch: CoverScratch::default(),
             solid_operator: SolidOperator::default(),
             collision: Collision::Bgk,
+            profiles: [Side::West, Side::East, Side::South, Side::North].map(|side| {
+                match (bc.side(side), side) {
+                    (SideCondition::VelocityProfile, Side::West | Side::East) => {
+                        vec![[T::zero(); 2]; ny]
+                    }
+                    (SideCondition::VelocityProfile, _) => vec![[T::zero(); 2]; nx],
+                    _ => Vec::new(),
+                }
+            }),
             simd: crate::exec::default_level(),
             streaming,
             layout: Layout::Collided,
@@ -722,6 +744,49 @@ impl<T: Real> FluidLattice<T> {
         Ok(())
     }
 
+    /// Set the velocity profile of a [`SideCondition::VelocityProfile`] side: one velocity (lattice units) per
+    /// node along it, in order of x (south, north) or y (west, east). Refused, with the lattice unchanged, for a
+    /// side that is not a profile side, a profile of the wrong length, or a velocity that is not finite or not
+    /// below the lattice speed.
+    pub fn set_side_profile(&mut self, side: Side, profile: &[[f64; 2]]) -> Result<()> {
+        let k = match side {
+            Side::West => 0,
+            Side::East => 1,
+            Side::South => 2,
+            Side::North => 3,
+        };
+        let field = format!("boundary.{side:?}.profile").to_lowercase();
+        if self.bc.side(side) != SideCondition::VelocityProfile {
+            return Err(LbdemError::field(
+                &field,
+                format!("{side:?}"),
+                "is not a velocity-profile side",
+                "declare the side as SideCondition::VelocityProfile when building the lattice",
+            ));
+        }
+        let values: Vec<[T; 2]> = profile.iter().map(|v| v.map(T::lit)).collect();
+        let mut candidate = self.profiles.clone();
+        candidate[k] = values;
+        side_profiles(&candidate)
+            .validate(&self.bc, self.shape.nx, self.shape.ny)
+            .map_err(|e| {
+                let n = match side {
+                    Side::West | Side::East => self.shape.ny,
+                    Side::South | Side::North => self.shape.nx,
+                };
+                LbdemError::field(
+                    &field,
+                    format!("{} values", profile.len()),
+                    &format!("is refused ({e:?})"),
+                    &format!(
+                        "give {n} finite velocities below the lattice speed, one per node along the side"
+                    ),
+                )
+            })?;
+        self.profiles = candidate;
+        Ok(())
+    }
+
     /// Change the prescribed density of a Zou–He pressure side (e.g. the boundary pressure drop of the fracture
     /// test at t = 0). The side must already be a pressure side: its node classification does not change.
     pub fn set_side_density(&mut self, side: Side, density: T) -> Result<()> {
@@ -854,6 +919,7 @@ impl<T: Real> FluidLattice<T> {
         let domain = Domain {
             shape,
             bc: self.bc,
+            profiles: side_profiles(&self.profiles),
             flags: &self.flags,
         };
         let mask = &self.special_mask;
@@ -1024,6 +1090,7 @@ impl<T: Real> FluidLattice<T> {
         let domain = Domain {
             shape,
             bc: self.bc,
+            profiles: side_profiles(&self.profiles),
             flags: &self.flags,
         };
         let params = self.params;
@@ -1138,6 +1205,7 @@ impl<T: Real> FluidLattice<T> {
             self.current(),
             self.layout,
             &self.bc,
+            &side_profiles(&self.profiles),
             &self.flags,
             self.params.force,
             &mut rho,
@@ -1162,6 +1230,7 @@ impl<T: Real> FluidLattice<T> {
                     self.current(),
                     self.layout,
                     &self.bc,
+                    &side_profiles(&self.profiles),
                     &self.flags,
                     x,
                     y,

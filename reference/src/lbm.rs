@@ -501,8 +501,36 @@ pub enum Condition {
     Wall,
     /// Zou–He pressure: prescribed density, zero tangential velocity.
     Pressure(f64),
-    /// Zou–He velocity: prescribed velocity.
+    /// Zou–He velocity: prescribed velocity (or, where [`Profiles`] has values for the side, one per node).
     Velocity([f64; 2]),
+    /// Half-way bounce-back wall sliding along itself at this velocity: a population re-entering through it
+    /// gains 6 w_i ρ c_i·u_w (Ladd 1994), ρ the density of the node's streamed populations.
+    MovingWall([f64; 2]),
+}
+
+/// Per-node velocities of velocity sides (empty: the side's uniform velocity): node k along the side, x for
+/// south and north, y for west and east.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Profiles {
+    /// x = 0.
+    pub west: Vec<[f64; 2]>,
+    /// x = nx − 1.
+    pub east: Vec<[f64; 2]>,
+    /// y = 0.
+    pub south: Vec<[f64; 2]>,
+    /// y = ny − 1.
+    pub north: Vec<[f64; 2]>,
+}
+
+impl Profiles {
+    fn of(&self, side: Side) -> &[[f64; 2]] {
+        match side {
+            Side::West => &self.west,
+            Side::East => &self.east,
+            Side::South => &self.south,
+            Side::North => &self.north,
+        }
+    }
 }
 
 impl Condition {
@@ -746,6 +774,27 @@ fn zou_he_sides(lat: &Lattice, x: usize, y: usize, sides: &Sides) -> (Option<Sid
 /// diagonal interior neighbour in `before` (1 if it is an obstacle node), and u = the prescribed velocity of a
 /// velocity side, else 0.
 pub fn close_zou_he(before: &Lattice, streamed: &mut [Populations], sides: &Sides) {
+    close_zou_he_profiles(before, streamed, sides, &Profiles::default());
+}
+
+/// [`close_zou_he`] with per-node velocities for the velocity sides that have a profile.
+pub fn close_zou_he_profiles(
+    before: &Lattice,
+    streamed: &mut [Populations],
+    sides: &Sides,
+    profiles: &Profiles,
+) {
+    // The condition of `side` at node (x, y): a profile replaces a velocity side's uniform velocity.
+    let at = |side: Side, x: usize, y: usize| -> Condition {
+        let p = profiles.of(side);
+        match sides.of(side) {
+            Condition::Velocity(_) if !p.is_empty() => Condition::Velocity(match side {
+                Side::West | Side::East => p[y],
+                Side::South | Side::North => p[x],
+            }),
+            c => c,
+        }
+    };
     for y in 0..before.ny {
         for x in 0..before.nx {
             let here = before.index(x, y);
@@ -755,7 +804,7 @@ pub fn close_zou_he(before: &Lattice, streamed: &mut [Populations], sides: &Side
             let f = &mut streamed[here];
             match zou_he_sides(before, x, y, sides) {
                 (None, None) => {}
-                (Some(s), None) | (None, Some(s)) => match sides.of(s) {
+                (Some(s), None) | (None, Some(s)) => match at(s, x, y) {
                     Condition::Pressure(rho) => {
                         zou_he_pressure(f, s, rho);
                     }
@@ -765,7 +814,7 @@ pub fn close_zou_he(before: &Lattice, streamed: &mut [Populations], sides: &Side
                     _ => unreachable!("only Zou–He sides are returned"),
                 },
                 (Some(sx), Some(sy)) => {
-                    let rho = match (sides.of(sx), sides.of(sy)) {
+                    let rho = match (at(sx, x, y), at(sy, x, y)) {
                         (Condition::Pressure(a), Condition::Pressure(b)) => 0.5 * (a + b),
                         (Condition::Pressure(a), _) | (_, Condition::Pressure(a)) => a,
                         _ => {
@@ -780,7 +829,7 @@ pub fn close_zou_he(before: &Lattice, streamed: &mut [Populations], sides: &Side
                             }
                         }
                     };
-                    let u = match (sides.of(sx), sides.of(sy)) {
+                    let u = match (at(sx, x, y), at(sy, x, y)) {
                         (Condition::Velocity(u), _) | (_, Condition::Velocity(u)) => u,
                         _ => [0.0, 0.0],
                     };
@@ -805,8 +854,70 @@ pub fn step(
     params: &Params,
     covered: &[Covered],
 ) -> (Lattice, Vec<Vec<[f64; 2]>>) {
+    step_with_profiles(lat, sides, &Profiles::default(), params, covered)
+}
+
+/// Ladd's correction at moving walls: every population of the streamed state that re-entered node (x, y)
+/// through a [`Condition::MovingWall`] side gains 6 w_i ρ c_i·u_w, ρ the node's streamed density before the
+/// corrections. A population that crossed two sides takes the velocity of the side crossed along y if it is a
+/// moving wall, else that of the side crossed along x.
+pub fn correct_moving_walls(lat: &Lattice, streamed: &mut [Populations], sides: &Sides) {
+    let moving = |c: Condition| match c {
+        Condition::MovingWall(u) => Some(u),
+        _ => None,
+    };
+    for y in 0..lat.ny {
+        for x in 0..lat.nx {
+            let here = lat.index(x, y);
+            if lat.solid[here] {
+                continue;
+            }
+            let rho = density(&streamed[here]);
+            for q in 1..Q {
+                // The population now moving along c_q came from (x, y) − c_q.
+                let sx = x as i64 - C[q][0];
+                let sy = y as i64 - C[q][1];
+                let x_side = if sx < 0 {
+                    Some(Side::West)
+                } else if sx >= lat.nx as i64 {
+                    Some(Side::East)
+                } else {
+                    None
+                };
+                let y_side = if sy < 0 {
+                    Some(Side::South)
+                } else if sy >= lat.ny as i64 {
+                    Some(Side::North)
+                } else {
+                    None
+                };
+                let crossed = |s: Option<Side>| s.filter(|&s| sides.of(s) != Condition::Periodic);
+                let (x_side, y_side) = (crossed(x_side), crossed(y_side));
+                if x_side.is_none() && y_side.is_none() {
+                    continue;
+                }
+                let u = y_side
+                    .and_then(|s| moving(sides.of(s)))
+                    .or_else(|| x_side.and_then(|s| moving(sides.of(s))));
+                if let Some(u) = u {
+                    streamed[here][q] += 6.0 * W[q] * rho * (c(q)[0] * u[0] + c(q)[1] * u[1]);
+                }
+            }
+        }
+    }
+}
+
+/// [`step`] with per-node velocities on the velocity sides that have a profile.
+pub fn step_with_profiles(
+    lat: &Lattice,
+    sides: &Sides,
+    profiles: &Profiles,
+    params: &Params,
+    covered: &[Covered],
+) -> (Lattice, Vec<Vec<[f64; 2]>>) {
     let mut streamed = stream(lat, sides);
-    close_zou_he(lat, &mut streamed, sides);
+    correct_moving_walls(lat, &mut streamed, sides);
+    close_zou_he_profiles(lat, &mut streamed, sides, profiles);
     let mut next = lat.clone();
     for (n, f) in streamed.iter().enumerate() {
         next.f[n] = if lat.solid[n] {

@@ -17,7 +17,9 @@
 //!   Whole steps are single steps, so errors do not compound.
 //! * Bitwise (`to_bits`) where the claim is exact: PSM with ε = 0 versus BGK, streaming as a permutation,
 //!   band splitting.
-use lbdem_kernels::fluid::boundary::{zou_he, zou_he_corner, Boundaries, SideCondition};
+use lbdem_kernels::fluid::boundary::{
+    zou_he, zou_he_corner, Boundaries, SideCondition, SideProfiles,
+};
 use lbdem_kernels::fluid::collide::{
     bgk_collide, bgk_collide_forced, bgk_collide_slices, fluid_collide, psm_collide,
     psm_collide_links, psm_velocity, trt_collide, trt_collide_forced, Collision, CollisionError,
@@ -459,6 +461,8 @@ struct Problem {
     magic: Option<f64>,
     /// Covered nodes use ΩΛ (else Ω₁).
     lambda: bool,
+    /// Per-node velocities of `VelocityProfile` sides.
+    profiles: reference::Profiles,
 }
 
 fn random_side(rng: &mut SplitMix) -> SideCondition<f64> {
@@ -534,6 +538,7 @@ fn random_problem(nx: usize, ny: usize, seed: u64, p_solid: f64, p_covered: f64)
         covered,
         magic: None,
         lambda: false,
+        profiles: reference::Profiles::default(),
     }
 }
 
@@ -543,6 +548,9 @@ fn to_reference_condition(c: SideCondition<f64>) -> reference::Condition {
         SideCondition::Wall => reference::Condition::Wall,
         SideCondition::Pressure { density } => reference::Condition::Pressure(density),
         SideCondition::Velocity { velocity } => reference::Condition::Velocity(velocity),
+        SideCondition::MovingWall { velocity } => reference::Condition::MovingWall(velocity),
+        // The per-node values are in the problem's `profiles`.
+        SideCondition::VelocityProfile => reference::Condition::Velocity([0.0; 2]),
     }
 }
 
@@ -583,6 +591,10 @@ fn side_in<T: Real>(c: SideCondition<f64>) -> SideCondition<T> {
         SideCondition::Velocity { velocity } => SideCondition::Velocity {
             velocity: velocity.map(T::lit),
         },
+        SideCondition::MovingWall { velocity } => SideCondition::MovingWall {
+            velocity: velocity.map(T::lit),
+        },
+        SideCondition::VelocityProfile => SideCondition::VelocityProfile,
     }
 }
 
@@ -610,9 +622,22 @@ fn kernel_step<T: Real>(
         .iter()
         .map(|&s| if s { SOLID } else { FLUID })
         .collect();
+    let profile = |v: &[[f64; 2]]| -> Vec<[T; 2]> { v.iter().map(|u| u.map(T::lit)).collect() };
+    let (pw, pe, ps, pn) = (
+        profile(&p.profiles.west),
+        profile(&p.profiles.east),
+        profile(&p.profiles.south),
+        profile(&p.profiles.north),
+    );
     let domain = Domain {
         shape,
         bc,
+        profiles: SideProfiles {
+            west: &pw,
+            east: &pe,
+            south: &ps,
+            north: &pn,
+        },
         flags: &flags,
     };
     let src = to_buffer::<T>(&shape, &p.lattice.f);
@@ -727,7 +752,13 @@ fn reference_step(p: &Problem, with_coverage: bool) -> (reference::Lattice, Vec<
     } else {
         Vec::new()
     };
-    reference::step(&p.lattice, &to_reference_sides(&p.bc), &params, &covered)
+    reference::step_with_profiles(
+        &p.lattice,
+        &to_reference_sides(&p.bc),
+        &p.profiles,
+        &params,
+        &covered,
+    )
 }
 
 /// Kernel step in precision `T` versus reference step, node by node, within `tol` relative to the reference
@@ -963,7 +994,7 @@ proptest! {
                     continue;
                 }
                 let Some(want) = expected_edge_state(&p.bc, nx, ny, x, y) else { continue };
-                let g = gather_node(&shape, &src, &p.bc, &flags, x, y);
+                let g = gather_node(&shape, &src, &p.bc, &SideProfiles::none(), &flags, x, y);
                 let (rho, j) = (density(&g), momentum(&g));
                 let tol = ROUNDOFF * scale(&g);
                 if let Some(rho0) = want.density {
@@ -1029,7 +1060,7 @@ proptest! {
         let src = to_buffer::<f64>(&shape, &p.lattice.f);
         let mut rho = vec![f64::NAN; shape.nodes()];
         let mut u = vec![[f64::NAN; 2]; shape.nodes()];
-        gathered_moments(&shape, &src, &p.bc, &flags, p.force, &mut rho, &mut u);
+        gathered_moments(&shape, &src, &p.bc, &SideProfiles::none(), &flags, p.force, &mut rho, &mut u);
         let sides = to_reference_sides(&p.bc);
         let mut streamed = reference::stream(&p.lattice, &sides);
         reference::close_zou_he(&p.lattice, &mut streamed, &sides);
@@ -1158,6 +1189,7 @@ fn body_force_poiseuille_matches_the_slip_formula() {
     let domain = Domain {
         shape,
         bc,
+        profiles: SideProfiles::none(),
         flags: &flags,
     };
     let mut special = vec![0u32; shape.nodes()];
@@ -1186,7 +1218,16 @@ fn body_force_poiseuille_matches_the_slip_formula() {
         }
         let mut rho = vec![0.0; shape.nodes()];
         let mut u = vec![[0.0; 2]; shape.nodes()];
-        gathered_moments(&shape, &a, &bc, &flags, [g, 0.0], &mut rho, &mut u);
+        gathered_moments(
+            &shape,
+            &a,
+            &bc,
+            &SideProfiles::none(),
+            &flags,
+            [g, 0.0],
+            &mut rho,
+            &mut u,
+        );
         let u_max =
             analytic::poiseuille_max_velocity(g, analytic::lattice_viscosity(tau), ny as f64);
         for (j, uj) in u.iter().enumerate() {
@@ -1426,6 +1467,7 @@ fn trt_poiseuille_error_does_not_depend_on_tau() {
     let domain = Domain {
         shape,
         bc,
+        profiles: SideProfiles::none(),
         flags: &flags,
     };
     let mut special = vec![0u32; shape.nodes()];
@@ -1459,7 +1501,16 @@ fn trt_poiseuille_error_does_not_depend_on_tau() {
             }
             let mut rho = vec![0.0; shape.nodes()];
             let mut u = vec![[0.0; 2]; shape.nodes()];
-            gathered_moments(&shape, &a, &bc, &flags, [g, 0.0], &mut rho, &mut u);
+            gathered_moments(
+                &shape,
+                &a,
+                &bc,
+                &SideProfiles::none(),
+                &flags,
+                [g, 0.0],
+                &mut rho,
+                &mut u,
+            );
             let u_max = analytic::poiseuille_max_velocity(g, nu, ny as f64);
             let slip = analytic::bounce_back_slip(g, nu, magic);
             let mut worst = 0.0f64;
@@ -1666,4 +1717,156 @@ proptest! {
             ex2.iter().flatten().map(|v| v.to_bits()).collect::<Vec<_>>()
         );
     }
+}
+
+// ---------------------------------------------------------------------------------------------------------
+// Moving walls (Ladd's correction) and velocity profiles on Zou–He sides
+// ---------------------------------------------------------------------------------------------------------
+
+/// A random problem (TRT or BGK, coverage with ΩΛ or Ω₁) whose non-periodic sides are, at random, also moving
+/// walls (tangential velocity) and velocity-profile sides (a random velocity per node).
+fn random_problem_with_moving_walls(nx: usize, ny: usize, seed: u64) -> Problem {
+    let mut p = random_trt_problem(nx, ny, seed, 0.1, 0.3);
+    let mut rng = SplitMix(seed ^ 0x4D4F_5649_4E47);
+    p.lambda = rng.chance(0.5);
+    if rng.chance(0.3) {
+        p.magic = None;
+    }
+    let mut profiles = reference::Profiles::default();
+    for side in [Side::West, Side::East, Side::South, Side::North] {
+        let cond = match side {
+            Side::West => &mut p.bc.west,
+            Side::East => &mut p.bc.east,
+            Side::South => &mut p.bc.south,
+            Side::North => &mut p.bc.north,
+        };
+        if *cond == SideCondition::Periodic {
+            continue;
+        }
+        let along_y = matches!(side, Side::West | Side::East);
+        match rng.below(3) {
+            0 => {
+                let v = rng.range(-0.1, 0.1);
+                *cond = SideCondition::MovingWall {
+                    velocity: if along_y { [0.0, v] } else { [v, 0.0] },
+                };
+            }
+            1 => {
+                *cond = SideCondition::VelocityProfile;
+                let n = if along_y { ny } else { nx };
+                let values: Vec<[f64; 2]> = (0..n).map(|_| rng.velocity()).collect();
+                match side {
+                    Side::West => profiles.west = values,
+                    Side::East => profiles.east = values,
+                    Side::South => profiles.south = values,
+                    Side::North => profiles.north = values,
+                }
+            }
+            _ => {}
+        }
+    }
+    assert_eq!(p.bc.validate(), Ok(()));
+    p.profiles = profiles;
+    p
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(128))]
+
+    /// Steps with moving walls and velocity-profile sides (and their corners with every other kind of side)
+    /// equal the reference step, which applies Ladd's correction after plain bounce-back and closes profile
+    /// sides with each node's own velocity; f64 and f32.
+    #[test]
+    fn moving_walls_and_velocity_profiles_match_the_reference(
+        nx in 1usize..=12, ny in 1usize..=12, seed in any::<u64>(),
+    ) {
+        let p = random_problem_with_moving_walls(nx, ny, seed);
+        compare_steps::<f64>(&p, true, ORACLE)?;
+        compare_steps::<f32>(&p, true, ORACLE_F32)?;
+    }
+
+    /// Every fluid node of a profile side that is not a corner with another Zou–He side leaves the gather with
+    /// exactly its own prescribed velocity, and the node next to a moving wall at rest gains nothing.
+    #[test]
+    fn a_profile_side_imposes_each_nodes_velocity(nx in 3usize..=12, ny in 3usize..=12, seed in any::<u64>()) {
+        let mut rng = SplitMix(seed);
+        let mut p = random_problem(nx, ny, seed, 0.0, 0.0);
+        p.bc = Boundaries {
+            west: SideCondition::VelocityProfile,
+            east: SideCondition::Pressure { density: 1.0 },
+            south: SideCondition::MovingWall { velocity: [0.0, 0.0] },
+            north: SideCondition::Wall,
+        };
+        let profile: Vec<[f64; 2]> = (0..ny).map(|_| rng.velocity()).collect();
+        let profiles = SideProfiles { west: &profile, east: &[], south: &[], north: &[] };
+        prop_assert_eq!(profiles.validate(&p.bc, nx, ny), Ok(()));
+        let shape = LatticeShape::for_type::<f64>(nx, ny).expect("small lattice");
+        let flags = vec![FLUID; shape.nodes()];
+        let src = to_buffer::<f64>(&shape, &p.lattice.f);
+        for (y, want) in profile.iter().enumerate().take(ny - 1).skip(1) {
+            let g = gather_node(&shape, &src, &p.bc, &profiles, &flags, 0, y);
+            let (rho, j) = (density(&g), momentum(&g));
+            for a in 0..2 {
+                prop_assert!((j[a] - rho * want[a]).abs() <= ROUNDOFF * scale(&g), "y {y} axis {a}");
+            }
+        }
+        // A moving wall at rest is a wall.
+        for x in 1..nx - 1 {
+            let g = gather_node(&shape, &src, &p.bc, &profiles, &flags, x, 0);
+            let mut q = p.clone();
+            q.bc.south = SideCondition::Wall;
+            let h = gather_node(&shape, &src, &q.bc, &profiles, &flags, x, 0);
+            prop_assert_eq!(g.map(f64::to_bits), h.map(f64::to_bits));
+        }
+    }
+}
+
+/// Profiles of the wrong length or with bad values, and moving walls with a normal velocity, are refused.
+#[test]
+fn bad_profiles_and_wall_velocities_are_refused() {
+    use lbdem_kernels::fluid::boundary::BoundaryError;
+    let bc = Boundaries {
+        west: SideCondition::VelocityProfile,
+        east: SideCondition::Pressure { density: 1.0 },
+        south: SideCondition::Wall,
+        north: SideCondition::MovingWall {
+            velocity: [0.05, 0.0],
+        },
+    };
+    assert_eq!(bc.validate(), Ok(()));
+    let short = [[0.0; 2]; 3];
+    let ok = [[0.01, 0.0]; 4];
+    let nan = [[0.0, 0.0], [f64::NAN, 0.0], [0.0; 2], [0.0; 2]];
+    let fast = [[0.0, 0.0], [1.0, 0.0], [0.0; 2], [0.0; 2]];
+    fn with(w: &[[f64; 2]]) -> SideProfiles<'_, f64> {
+        SideProfiles {
+            west: w,
+            east: &[],
+            south: &[],
+            north: &[],
+        }
+    }
+    assert_eq!(
+        with(&short).validate(&bc, 5, 4),
+        Err(BoundaryError::ProfileLength(Side::West))
+    );
+    assert_eq!(with(&ok).validate(&bc, 5, 4), Ok(()));
+    assert_eq!(
+        with(&nan).validate(&bc, 5, 4),
+        Err(BoundaryError::BadVelocity(Side::West))
+    );
+    assert_eq!(
+        with(&fast).validate(&bc, 5, 4),
+        Err(BoundaryError::BadVelocity(Side::West))
+    );
+    let normal = Boundaries {
+        north: SideCondition::MovingWall {
+            velocity: [0.0, 0.01],
+        },
+        ..bc
+    };
+    assert_eq!(
+        normal.validate(),
+        Err(BoundaryError::WallVelocityNotTangential(Side::North))
+    );
 }

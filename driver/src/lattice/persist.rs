@@ -1,7 +1,7 @@
 //! [`Persist`] for [`FluidLattice`]: shape, side conditions, collision parameters, node flags, the current
 //! population buffer (every plane in full, padding included), the step counter, the PSM coverage (covered
 //! nodes, shares, owners, the momentum exchanged at the last step, the weighting), the solid operator and the
-//! fluid collision (BGK, or TRT with its magic parameter). The
+//! fluid collision (BGK, or TRT with its magic parameter) and the velocity profiles of profile sides. The
 //! special-node list is derived from the flags and rebuilt. The populations are saved in the two-lattice layout
 //! whatever the streaming scheme and step parity (see [`FluidLattice::populations`]), and a loaded lattice starts
 //! from that layout with the scheme chosen for the new process: either continues bitwise as the saved run would
@@ -52,6 +52,10 @@ impl<T: Real> Persist for FluidLattice<T> {
                 e.real(t.magic());
             }
         }
+        for p in &self.profiles {
+            e.usize(p.len());
+            p.iter().for_each(|v| e.real2(*v));
+        }
     }
 
     fn load(d: &mut Decoder<'_>) -> Result<Self> {
@@ -90,6 +94,13 @@ impl<T: Real> Persist for FluidLattice<T> {
             }
         };
         lattice.set_collision(collision)?;
+        for k in 0..4 {
+            let p = pairs::<T>(d)?;
+            d.ensure(p.len() == lattice.profiles[k].len(), || {
+                format!("a side profile of {} values", p.len())
+            })?;
+            lattice.profiles[k] = p;
+        }
         Ok(lattice)
     }
 }

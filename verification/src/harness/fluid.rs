@@ -11,7 +11,7 @@ use crate::{Chooser, INTERESTING_F64};
 use lbdem_kernels::fluid::aa::{
     local_row, plane_row, post_collision_offset, scatter_row, AaStep, Layout,
 };
-use lbdem_kernels::fluid::boundary::{Boundaries, SideCondition};
+use lbdem_kernels::fluid::boundary::{Boundaries, SideCondition, SideProfiles};
 use lbdem_kernels::fluid::collide::{
     Collision, PsmParams, SolidOperator, SolidShare, Weighting, ALL_LINKS_OPEN,
 };
@@ -385,6 +385,7 @@ pub fn fix_passes_in_bounds(c: &mut dyn Chooser, max: usize) {
     let domain = Domain {
         shape,
         bc,
+        profiles: SideProfiles::none(),
         flags: &flags,
     };
     let mut special = vec![u32::MAX; shape.nodes()];
