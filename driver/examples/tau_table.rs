@@ -15,13 +15,7 @@ use lbdem_kernels::fluid::collide::{SolidOperator, Weighting};
 use psm_cases::{square_array, Fluid, Method, TAUS};
 
 fn operator_name(op: SolidOperator) -> &'static str {
-    match op {
-        SolidOperator::NonEquilibriumBounceBack => "Ω₁",
-        SolidOperator::Superposition => "Ω₂",
-        SolidOperator::BounceBack => "Ω₃",
-        SolidOperator::LinearizedBounceBack => "Ω₁ₗ",
-        SolidOperator::LambdaConsistent => "ΩΛ",
-    }
+    op.symbol()
 }
 
 fn weighting_name(w: Weighting) -> &'static str {
@@ -48,8 +42,8 @@ fn main() {
     let ops = [
         SolidOperator::NonEquilibriumBounceBack,
         SolidOperator::Superposition,
-        SolidOperator::BounceBack,
-        SolidOperator::LinearizedBounceBack,
+        SolidOperator::MovingWallBounceBack,
+        SolidOperator::LinearizedNonEquilibriumBounceBack,
     ];
     if only.as_deref() != Some("lambda") {
         for op in ops {

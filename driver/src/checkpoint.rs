@@ -785,8 +785,8 @@ impl Persist for SolidOperator {
         e.u8(match self {
             SolidOperator::NonEquilibriumBounceBack => 0,
             SolidOperator::Superposition => 1,
-            SolidOperator::BounceBack => 2,
-            SolidOperator::LinearizedBounceBack => 3,
+            SolidOperator::MovingWallBounceBack => 2,
+            SolidOperator::LinearizedNonEquilibriumBounceBack => 3,
             SolidOperator::LambdaConsistent => 4,
         });
     }
@@ -794,8 +794,8 @@ impl Persist for SolidOperator {
         Ok(match d.tag("PSM solid operator", 5)? {
             0 => SolidOperator::NonEquilibriumBounceBack,
             1 => SolidOperator::Superposition,
-            2 => SolidOperator::BounceBack,
-            3 => SolidOperator::LinearizedBounceBack,
+            2 => SolidOperator::MovingWallBounceBack,
+            3 => SolidOperator::LinearizedNonEquilibriumBounceBack,
             _ => SolidOperator::LambdaConsistent,
         })
     }

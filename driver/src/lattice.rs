@@ -1435,7 +1435,7 @@ mod tests {
         let mut incremental = FluidLattice::<T>::new(nx, ny, bc, params).unwrap();
         let mut scratch = FluidLattice::<T>::new(nx, ny, bc, params).unwrap();
         for l in [&mut incremental, &mut scratch] {
-            l.set_solid_operator(SolidOperator::BounceBack);
+            l.set_solid_operator(SolidOperator::MovingWallBounceBack);
             l.fill_equilibrium(|x, y| {
                 (
                     T::one(),

@@ -1046,7 +1046,7 @@ pub fn run_pressure_diffusion(scene: &PoroScene) -> Result<DiffusionOutcome> {
                 force: [0.0; 2],
             },
         )?;
-        f.set_solid_operator(SolidOperator::BounceBack);
+        f.set_solid_operator(SolidOperator::MovingWallBounceBack);
         f.cover_with_bodies(&bodies, wf);
         Ok(f)
     };
@@ -1299,7 +1299,7 @@ pub fn run_compressibility(scene: &PoroScene) -> Result<CompressibilityOutcome> 
             force: [0.0; 2],
         },
     )?;
-    fluid.set_solid_operator(SolidOperator::BounceBack);
+    fluid.set_solid_operator(SolidOperator::MovingWallBounceBack);
     // The piston: an ellipse 2b = 10 nodes thick with its major axis along y, 50 × the box height long, so its
     // faces are flat to (H/2)²/(2a) · b/a ≈ 1e-5 nodes across the box. Fluid fills the chamber behind it.
     let (semi_major, semi_minor) = (50.0 * ny as f64, PISTON_HALF_THICKNESS);
@@ -1487,7 +1487,7 @@ pub fn run_consolidation(scene: &PoroScene) -> Result<ConsolidationOutcome> {
             force: [0.0; 2],
         },
     )?;
-    fluid.set_solid_operator(SolidOperator::LinearizedBounceBack);
+    fluid.set_solid_operator(SolidOperator::LinearizedNonEquilibriumBounceBack);
     let map = LatticeMap {
         spacing: h,
         timestep: u.timestep,

@@ -139,8 +139,8 @@ impl SolidOperatorChoice {
         match self {
             Self::BounceBack => SolidOperator::NonEquilibriumBounceBack,
             Self::Superposition => SolidOperator::Superposition,
-            Self::MovingWall => SolidOperator::BounceBack,
-            Self::Linearized => SolidOperator::LinearizedBounceBack,
+            Self::MovingWall => SolidOperator::MovingWallBounceBack,
+            Self::Linearized => SolidOperator::LinearizedNonEquilibriumBounceBack,
         }
     }
 }

@@ -47,7 +47,7 @@ fn busy<T: Real>(bc: Boundaries<T>, force: [f64; 2], magic: f64) -> FluidLattice
         )
     });
     l.set_solid(|x, y| (x == 30 && y < 6) || (x + 3 * y).is_multiple_of(29));
-    l.set_solid_operator(SolidOperator::LinearizedBounceBack);
+    l.set_solid_operator(SolidOperator::LinearizedNonEquilibriumBounceBack);
     l.cover_with_discs(
         &[
             FluidDisc {

@@ -258,10 +258,10 @@ pub enum SolidOp {
     NonEquilibriumBounceBack,
     /// Ω₂: f_i^eq(ρ,u_s) − f_i + (1 − 1/τ)(f_i − f_i^eq(ρ,u)) (Holdych's superposition).
     Superposition,
-    /// Ω₃: f_ī − f_ī^eq(ρ,u_s) + f_i^eq(ρ,u_s) − f_i (Owen et al. eq. 33).
-    BounceBack,
+    /// Ω₃: f_ī − f_ī^eq(ρ,u_s) + f_i^eq(ρ,u_s) − f_i (Owen et al. eq. 33, moving-wall bounce-back).
+    MovingWallBounceBack,
     /// Ω₁ₗ: f_ī − f_i + 3 w_i ρ c_i·(u + u_s) (Ω₁ without the even part of its equilibrium difference).
-    LinearizedBounceBack,
+    LinearizedNonEquilibriumBounceBack,
 }
 
 /// As [`psm`], with the solid operator chosen (see [`SolidOp`]).
@@ -336,8 +336,8 @@ pub fn psm_with_collision(
             let omega_s = match op {
                 SolidOp::Superposition => feq_s[i] - f[i] + post_non_equilibrium(i),
                 SolidOp::NonEquilibriumBounceBack => f[o] - feq[o] + feq_s[i] - f[i],
-                SolidOp::BounceBack => f[o] - feq_s[o] + feq_s[i] - f[i],
-                SolidOp::LinearizedBounceBack => {
+                SolidOp::MovingWallBounceBack => f[o] - feq_s[o] + feq_s[i] - f[i],
+                SolidOp::LinearizedNonEquilibriumBounceBack => {
                     let cv =
                         c(i)[0] * (u[0] + solid.velocity[0]) + c(i)[1] * (u[1] + solid.velocity[1]);
                     f[o] - f[i] + 3.0 * W[i] * rho * cv

@@ -236,8 +236,8 @@ proptest! {
         let (solid, ref_op) = [
             (SolidOperator::NonEquilibriumBounceBack, reference::SolidOp::NonEquilibriumBounceBack),
             (SolidOperator::Superposition, reference::SolidOp::Superposition),
-            (SolidOperator::BounceBack, reference::SolidOp::BounceBack),
-            (SolidOperator::LinearizedBounceBack, reference::SolidOp::LinearizedBounceBack),
+            (SolidOperator::MovingWallBounceBack, reference::SolidOp::MovingWallBounceBack),
+            (SolidOperator::LinearizedNonEquilibriumBounceBack, reference::SolidOp::LinearizedNonEquilibriumBounceBack),
         ][op];
         let params = PsmParams { tau, weighting: w, force, solid, collision: Collision::Bgk };
         let mut g = f;
@@ -255,7 +255,7 @@ proptest! {
         if !forced {
             // REFERENCE.md §2.2–2.3: with Ω₁ or Ω₂ and no forcing, F_s = B_s ρ (u − u_s) for any populations;
             // Ω₃ hands over twice that; Ω₁ₗ exactly Ω₁'s.
-            let factor = if solid == SolidOperator::BounceBack { 2.0 } else { 1.0 };
+            let factor = if solid == SolidOperator::MovingWallBounceBack { 2.0 } else { 1.0 };
             let (rho, j) = (density(&f), momentum(&f));
             let eps: f64 = shares.iter().map(|s| s.fraction).sum();
             for (s, e) in shares.iter().zip(&exchange) {
@@ -366,7 +366,7 @@ fn psm_bounce_back_operator_at_full_cover_is_moving_wall_bounce_back() {
             tau: 0.7,
             weighting: Weighting::NobleTorczynski,
             force: [0.0; 2],
-            solid: SolidOperator::BounceBack,
+            solid: SolidOperator::MovingWallBounceBack,
             collision: Collision::Bgk,
         };
         psm_collide(&mut f, &params, &shares, &mut ex);
@@ -423,7 +423,7 @@ fn linearized_operator_at_full_cover_moves_with_the_solid_and_keeps_the_rest_pop
             tau: 0.7,
             weighting: Weighting::NobleTorczynski,
             force: [0.0; 2],
-            solid: SolidOperator::LinearizedBounceBack,
+            solid: SolidOperator::LinearizedNonEquilibriumBounceBack,
             collision: Collision::Bgk,
         };
         psm_collide(&mut f, &params, &shares, &mut ex);
@@ -1328,8 +1328,8 @@ proptest! {
         let (solid, ref_op) = [
             (SolidOperator::NonEquilibriumBounceBack, reference::SolidOp::NonEquilibriumBounceBack),
             (SolidOperator::Superposition, reference::SolidOp::Superposition),
-            (SolidOperator::BounceBack, reference::SolidOp::BounceBack),
-            (SolidOperator::LinearizedBounceBack, reference::SolidOp::LinearizedBounceBack),
+            (SolidOperator::MovingWallBounceBack, reference::SolidOp::MovingWallBounceBack),
+            (SolidOperator::LinearizedNonEquilibriumBounceBack, reference::SolidOp::LinearizedNonEquilibriumBounceBack),
         ][op];
         let params = PsmParams { tau, weighting: w, force, solid, collision: trt(magic) };
         let mut g = f;

@@ -53,8 +53,8 @@ impl Method {
         let mut v: Vec<Method> = [
             SolidOperator::NonEquilibriumBounceBack,
             SolidOperator::Superposition,
-            SolidOperator::BounceBack,
-            SolidOperator::LinearizedBounceBack,
+            SolidOperator::MovingWallBounceBack,
+            SolidOperator::LinearizedNonEquilibriumBounceBack,
         ]
         .into_iter()
         .map(|solid| Method {
@@ -82,13 +82,7 @@ impl Method {
 
     /// Short name for tables.
     pub fn name(&self) -> String {
-        let op = match self.solid {
-            SolidOperator::NonEquilibriumBounceBack => "Ω₁",
-            SolidOperator::Superposition => "Ω₂",
-            SolidOperator::BounceBack => "Ω₃",
-            SolidOperator::LinearizedBounceBack => "Ω₁ₗ",
-            SolidOperator::LambdaConsistent => "ΩΛ",
-        };
+        let op = self.solid.symbol();
         match self.magic {
             None => format!("{op} (BGK)"),
             Some(m) => format!("{op} (TRT Λ={m})"),

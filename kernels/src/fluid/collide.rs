@@ -20,7 +20,7 @@
 //!   unstable: at B = 1 the fluid inside a grain leaves each collision with its velocity relative to the
 //!   grain reversed, the grain takes the reaction, and the relative velocity w evolves as
 //!   w ← −(1 + 2 m_f/m_s) w (m_f the covered fluid mass, m_s the grain's), which grows for any finite grain
-//!   mass. Ω₁ sets w to 0 instead (w ← −(m_f/m_s) w). The linearised Ω₁ (`LinearizedBounceBack`),
+//!   mass. Ω₁ sets w to 0 instead (w ← −(m_f/m_s) w). The linearised Ω₁ (`LinearizedNonEquilibriumBounceBack`),
 //!   Ω^S_{i,s} = f_ī − f_i + 3 w_i ρ c_i·(u + u_s), keeps Ω₁'s momentum exchange and interior behaviour and
 //!   drops only the even, O(Ma²) part of Ω₁'s equilibrium difference, which is what pumps mass into the rest
 //!   population: it is the operator for moving grains with pressure boundaries.
@@ -43,10 +43,15 @@ pub enum Weighting {
     SolidFraction,
 }
 
-/// Which solid collision operator Ω^S the partially-saturated collision uses.
+/// Which solid collision operator Ω^S the partially-saturated collision uses, named by the literature (the
+/// Ω numbering of Owen, Leonardi & Feng 2011, Int. J. Numer. Meth. Eng. 87:66; [`SolidOperator::symbol`]).
+///
+/// Scene files of this version still use their own words (`bounce_back` is Ω₁ there, `moving_wall` Ω₃,
+/// `linearized` Ω₁ₗ); the kernel's names say what each operator is.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum SolidOperator {
-    /// Ω₁, Noble & Torczynski's non-equilibrium bounce-back (dissertation eq. 4.6).
+    /// Ω₁, Noble & Torczynski's (1998) non-equilibrium bounce-back (dissertation eq. 4.6):
+    /// f_ī − f_ī^eq(ρ, u) + f_i^eq(ρ, u_s) − f_i.
     #[default]
     NonEquilibriumBounceBack,
     /// Ω₂, the superposition operator of Holdych (2003) (Owen et al. 2011, eq. 29).
@@ -57,19 +62,32 @@ pub enum SolidOperator {
     /// over per unit B is 2ρ(u_s − u), twice Ω₁'s. Not for free grains: at B = 1 it reverses the velocity of
     /// the fluid inside a grain relative to the grain, and with the grain's reaction the coupled mode grows by
     /// 1 + 2 m_fluid/m_grain per step (see the module notes).
-    BounceBack,
-    /// Ω₁ with the equilibrium difference linearised ("Ω₁ₗ"): f_ī − f_i + 3 w_i ρ c_i·(u + u_s). It is Ω₁ minus
+    MovingWallBounceBack,
+    /// Ω₁ₗ, Ω₁ with the equilibrium difference linearised: f_ī − f_i + 3 w_i ρ c_i·(u + u_s). It is Ω₁ minus
     /// the part of f_i^eq(ρ, u_s) − f_ī^eq(ρ, u) that is even in c_i (second order in the Mach number), so it
     /// hands over exactly Ω₁'s momentum ρ(u_s − u) per unit B and sets the fluid velocity at a fully covered
     /// node to u_s as Ω₁ does (stable with free grains), but never touches the rest population: fully covered
     /// regions of open systems do not accumulate mass.
-    LinearizedBounceBack,
+    LinearizedNonEquilibriumBounceBack,
     /// ΩΛ, the magic-parameter-consistent partially saturated operator (see [`lambda_collide`]): partly covered
     /// nodes are two-relaxation-time fluid with viscosity ν/(1 − B), Λ kept, and a Brinkman friction
     /// 3νκB ρ(u* − u_s) towards the solid; fully covered nodes bounce back, link by link, what arrives from
     /// nodes that are not fully covered (Ladd 1994) and reset the rest to the solid's equilibrium. With TRT its
     /// steady solutions (drag, permeability, wall location) do not depend on τ at fixed Λ.
     LambdaConsistent,
+}
+
+impl SolidOperator {
+    /// The operator's symbol: "Ω₁", "Ω₂", "Ω₃", "Ω₁ₗ" or "ΩΛ".
+    pub fn symbol(self) -> &'static str {
+        match self {
+            SolidOperator::NonEquilibriumBounceBack => "Ω₁",
+            SolidOperator::Superposition => "Ω₂",
+            SolidOperator::MovingWallBounceBack => "Ω₃",
+            SolidOperator::LinearizedNonEquilibriumBounceBack => "Ω₁ₗ",
+            SolidOperator::LambdaConsistent => "ΩΛ",
+        }
+    }
 }
 
 /// Links of a covered node whose neighbour is **not** fully covered: bit i (1 ≤ i ≤ 8) is set when the node
@@ -508,12 +526,12 @@ pub fn psm_collide_links<T: Real>(
                 }
             }
         },
-        SolidOperator::BounceBack => {
+        SolidOperator::MovingWallBounceBack => {
             for i in 0..Q {
                 common[i] = f[OPPOSITE[i]] - f[i];
             }
         }
-        SolidOperator::LinearizedBounceBack => {
+        SolidOperator::LinearizedNonEquilibriumBounceBack => {
             let w = weights::<T>();
             let three = T::lit(3.0);
             for i in 0..Q {
@@ -525,8 +543,8 @@ pub fn psm_collide_links<T: Real>(
         // Handled by `lambda_collide` above.
         SolidOperator::LambdaConsistent => {}
     }
-    let bounce_back = params.solid == SolidOperator::BounceBack;
-    let linearized = params.solid == SolidOperator::LinearizedBounceBack;
+    let bounce_back = params.solid == SolidOperator::MovingWallBounceBack;
+    let linearized = params.solid == SolidOperator::LinearizedNonEquilibriumBounceBack;
     let w_lin = weights::<T>();
     let one_minus_b = T::one() - b_total;
     let mut post = [T::zero(); Q];
