@@ -23,8 +23,8 @@ use std::sync::Mutex;
 use std::time::{Duration, Instant};
 
 use criterion::{BenchmarkId, Criterion, Throughput};
-use lbdem::coupled::{CoupledWorld, StepTimings};
-use lbdem::solid::DemWorld;
+use lbdem::engine::coupled::{CoupledWorld, StepTimings};
+use lbdem::engine::dem::DemWorld;
 use lbdem_kernels::Real;
 
 /// Steps timed on one world before a fresh one is built (the first two steps of each world are not timed).
@@ -142,7 +142,7 @@ fn print_summary(grains: usize, bonds: usize) {
     println!(
         "=== coupled step, {NX} x {NY} lattice, {grains} ellipse grains (aspect 0.5), {bonds} bonds, fluid radius \
          {FLUID_RADIUS}, Ω₁ₗ, {} streaming (median of {SAMPLES} samples) ===",
-        lbdem::lattice::default_streaming().name()
+        coupled_scene::streaming().name()
     );
     println!(
         "{:<4} {:>7} {:>9} {:>9} {:>8} {:>9} {:>9} {:>6} {:>8} {:>7}",
@@ -185,12 +185,6 @@ fn print_summary(grains: usize, bonds: usize) {
 
 fn main() {
     let load_before = load_average();
-    if let Some(s) = std::env::var("LBDEM_STREAMING")
-        .ok()
-        .and_then(|v| lbdem::lattice::Streaming::from_name(&v))
-    {
-        lbdem::lattice::set_default_streaming(s);
-    }
     let start = Instant::now();
     let dem = coupled_scene::packed_grains();
     println!(

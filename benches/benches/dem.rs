@@ -1,4 +1,4 @@
-//! DEM step throughput of `lbdem::solid::DemWorld`: particle-steps per second and candidate contacts per
+//! DEM step throughput of `lbdem::engine::dem::DemWorld`: particle-steps per second and candidate contacts per
 //! second for bonded assemblies of 1 000, 10 000 and 100 000 particles (discs, and ellipses of aspect 0.5),
 //! on 1 and 2 threads.
 //!
@@ -9,7 +9,7 @@
 //! Throughput is in particles per iteration (criterion's elements/s = particle-steps/s); the candidate pairs
 //! per step are printed at setup so that contacts/s = pairs × steps/s.
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
-use lbdem::solid::{boxed_sample, hexagonal_packing, BondSpec, DemWorld, PlatenControl};
+use lbdem::engine::dem::{boxed_sample, hexagonal_packing, BondSpec, DemWorld, PlatenControl};
 use lbdem_kernels::dem::assembly::ContactModel;
 
 fn assembly(side: usize, aspect: f64) -> DemWorld<f64> {

@@ -17,7 +17,7 @@
 //! (f32), with the bandwidth being the triad figure for the same thread count. The two-lattice scheme writes
 //! into a second buffer, so the hardware also reads each destination line before writing it (write-allocate):
 //! 216 B move per f64 update against the 144 counted, where the triad moves 32 B against 24. The in-place AA
-//! scheme (the default, `lbdem::lattice::Streaming`) writes the lines it has just read: 144 B move, so it can
+//! scheme (the default, `lbdem::engine::lattice::Streaming`) writes the lines it has just read: 144 B move, so it can
 //! exceed 100 % of this ceiling.
 //!
 //! Each case's time per iteration is the median of criterion's samples (taken through `iter_custom`); a table
@@ -27,7 +27,7 @@
 //! 2-thread figures (triad and lattice alike) noisy, so repeat and compare runs with a low load.
 //!
 //! The workspace builds for the baseline x86-64 target (SSE2), and the bulk pass is also compiled for AVX2 and
-//! AVX-512 and picked at run time (`lbdem::exec`); results are bitwise identical at every level and with either
+//! AVX-512 and picked at run time (`lbdem::engine::exec`); results are bitwise identical at every level and with either
 //! scheme. Every case runs in place (AA) at the widest level the CPU has; the 2048² BGK cases also run with the
 //! two-lattice scheme and at the baseline level, and the PSM cases with the two-lattice scheme, so the table
 //! shows what each gains.
@@ -36,8 +36,8 @@ use std::sync::Mutex;
 use std::time::{Duration, Instant};
 
 use criterion::{BenchmarkId, Criterion, Throughput};
-use lbdem::exec::SimdLevel;
-use lbdem::lattice::{FluidDisc, FluidLattice, Streaming};
+use lbdem::engine::exec::SimdLevel;
+use lbdem::engine::lattice::{FluidDisc, FluidLattice, Streaming};
 use lbdem_kernels::fluid::boundary::Boundaries;
 use lbdem_kernels::fluid::collide::{Collision, SolidOperator, Trt, Weighting};
 use lbdem_kernels::fluid::step::FluidParams;

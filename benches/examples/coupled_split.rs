@@ -10,7 +10,7 @@ mod coupled_scene;
 
 use std::time::Duration;
 
-use lbdem::coupled::StepTimings;
+use lbdem::engine::coupled::StepTimings;
 use lbdem_kernels::Real;
 
 fn ms(d: Duration, steps: u64) -> f64 {
@@ -18,7 +18,7 @@ fn ms(d: Duration, steps: u64) -> f64 {
 }
 
 fn run<T: Real>(
-    dem: &lbdem::solid::DemWorld<f64>,
+    dem: &lbdem::engine::dem::DemWorld<f64>,
     nx: usize,
     ny: usize,
     steps: u64,

@@ -11,7 +11,7 @@
 //! (0 < ε < 1e-9) or an exactly full (ε = 1) solid fraction.
 use std::time::Instant;
 
-use lbdem::lattice::FluidLattice;
+use lbdem::engine::lattice::FluidLattice;
 use lbdem_kernels::coupling::{BodyShape, CoupledBody};
 use lbdem_kernels::fluid::boundary::Boundaries;
 use lbdem_kernels::fluid::collide::Weighting;

@@ -2,7 +2,7 @@
 //! obstacle nodes, body force and PSM-covered discs) for a fixed number of steps in f32 and f64 and prints an
 //! FNV-1a hash of the population bits. A kernel optimisation that claims to keep the arithmetic unchanged must
 //! print the same hashes before and after: `cargo run --release -p lbdem-benches --example fluid_checksum`.
-use lbdem::lattice::{FluidDisc, FluidLattice};
+use lbdem::engine::lattice::{FluidDisc, FluidLattice};
 use lbdem_kernels::fluid::boundary::{Boundaries, SideCondition};
 use lbdem_kernels::fluid::collide::Weighting;
 use lbdem_kernels::fluid::step::FluidParams;

@@ -8,7 +8,7 @@
 //! arithmetic, not memory, sets the time: the harder case for TRT.
 use std::time::Instant;
 
-use lbdem::lattice::FluidLattice;
+use lbdem::engine::lattice::FluidLattice;
 use lbdem_kernels::fluid::boundary::Boundaries;
 use lbdem_kernels::fluid::collide::{Collision, Trt};
 use lbdem_kernels::fluid::step::FluidParams;

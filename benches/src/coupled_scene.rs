@@ -2,10 +2,10 @@
 //! `#[path]`): the fracture test's size, ~1000 bonded ellipse grains (aspect 0.5, the dissertation's ch. 6.6
 //! sizes) packed by [`generate_packing`] in a 2:1 box, mapped onto an `nx × ny` lattice spanning the box, a small
 //! pressure drop west → east (Zou–He), walls north and south, the Ω₁ₗ solid operator (`LinearizedNonEquilibriumBounceBack`).
-use lbdem::coupled::{CoupledWorld, LatticeMap};
-use lbdem::lattice::FluidLattice;
-use lbdem::solid::packing::{generate_packing, PackingSpec};
-use lbdem::solid::world::{BondSpec, DemWorld};
+use lbdem::engine::coupled::{CoupledWorld, LatticeMap};
+use lbdem::engine::dem::packing::{generate_packing, PackingSpec};
+use lbdem::engine::dem::world::{BondSpec, DemWorld};
+use lbdem::engine::lattice::FluidLattice;
 use lbdem_kernels::fluid::boundary::{Boundaries, SideCondition};
 use lbdem_kernels::fluid::collide::{SolidOperator, Weighting};
 use lbdem_kernels::fluid::step::FluidParams;
@@ -18,6 +18,14 @@ pub const WIDTH: f64 = 5.6;
 pub const HEIGHT: f64 = 2.8;
 
 /// The bonded packing (f64 DEM), generated once per process (a few seconds).
+/// The streaming scheme of the benchmark lattices: `LBDEM_STREAMING` (aa or two-lattice), default aa.
+pub fn streaming() -> lbdem::engine::lattice::Streaming {
+    std::env::var("LBDEM_STREAMING")
+        .ok()
+        .and_then(|v| lbdem::engine::lattice::Streaming::from_name(&v))
+        .unwrap_or_default()
+}
+
 pub fn packed_grains() -> DemWorld<f64> {
     let mut spec = PackingSpec::dissertation(WIDTH, HEIGHT, 0.5, 7);
     // A looser stress tolerance and fewer servo steps keep the setup short; the bench measures the step, not
@@ -59,6 +67,7 @@ pub fn coupled_world<T: Real>(
         force: [T::zero(); 2],
     };
     let mut fluid = FluidLattice::<T>::new(nx, ny, bc, params).expect("benchmark lattice");
+    fluid.set_streaming(streaming());
     fluid.set_solid_operator(SolidOperator::LinearizedNonEquilibriumBounceBack);
     // Lattice nodes span the box: node (0, 0) at (0, 0), node (nx − 1, ny − 1) at (W, H) (h from the width).
     let map = LatticeMap {

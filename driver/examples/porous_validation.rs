@@ -8,10 +8,11 @@
 //! Full variants: drag at c = 0.2…0.6 for l = 20, 40, 80; the Re sweep of fig. 5.4 (targets 0.001 to 300;
 //! inertia lowers the measured Re of the highest target to 185) at
 //! l = 80; a 200-disc jittered slab for Darcy's law; 200-disc slabs of four disc sizes for Kozeny–Carman.
-use lbdem::porous::{
-    darcy_fit, fitted_kozeny_constant, solve_array, solve_porous, ArrayCase, PorousCase,
-    PorousOutcome, SolidOperatorChoice,
+use lbdem::kinds::cylinder_array::{solve_array, ArrayCase};
+use lbdem::kinds::porous_flow::{
+    darcy_fit, fitted_kozeny_constant, solve_porous, PorousCase, PorousOutcome,
 };
+use lbdem_kernels::fluid::collide::SolidOperator;
 
 fn diameter(pitch: usize, c: f64) -> f64 {
     2.0 * pitch as f64 * (c / std::f64::consts::PI).sqrt()
@@ -37,7 +38,7 @@ fn slab(
         seed: 1,
         walls: false,
         tau: 0.8,
-        solid_operator: SolidOperatorChoice::BounceBack,
+        solid_operator: SolidOperator::NonEquilibriumBounceBack,
         density_drop: drho,
         steady_tolerance: tol,
         check_interval: 100,
@@ -49,13 +50,7 @@ fn pct(x: f64) -> String {
     format!("{:+.2} %", 100.0 * x)
 }
 
-fn drag_rows(
-    cells: &[usize],
-    fractions: &[f64],
-    tau: f64,
-    op: SolidOperatorChoice,
-    asserted: bool,
-) {
+fn drag_rows(cells: &[usize], fractions: &[f64], tau: f64, op: SolidOperator, asserted: bool) {
     for &c in fractions {
         for &l in cells {
             let mut case = ArrayCase::stokes(l, c, tau);
@@ -67,21 +62,16 @@ fn drag_rows(
             } else {
                 "—"
             };
-            let tol = if asserted && op == SolidOperatorChoice::MovingWall {
+            let tol = if asserted && op == SolidOperator::MovingWallBounceBack {
                 "≤ 2.5 % (asserted)".to_string()
-            } else if asserted && op == SolidOperatorChoice::Linearized {
+            } else if asserted && op == SolidOperator::LinearizedNonEquilibriumBounceBack {
                 format!("{class} (asserted, as Ω₁)")
             } else if asserted {
                 format!("{class} (asserted)")
             } else {
                 format!("§1.5 class {class}")
             };
-            let opname = match op {
-                SolidOperatorChoice::BounceBack => "Ω₁",
-                SolidOperatorChoice::Superposition => "Ω₂",
-                SolidOperatorChoice::MovingWall => "Ω₃",
-                SolidOperatorChoice::Linearized => "Ω₁ₗ",
-            };
+            let opname = op.symbol();
             match solve_array::<f64>(&case) {
                 Ok(r) => println!(
                     "| Square array, Stokes, {opname}, c = {c}, l = {l} (D = {:.1}, gap {:.1} nodes), τ = {tau} | F/(μU) = {:.2} ({} steps, drift {:.0e}/step) | S&A {:.2} | {} | {tol} |",
@@ -168,20 +158,20 @@ fn main() {
     println!("| case | measured | reference | error | tolerance (test) |");
     println!("|---|---|---|---|---|");
     // Fast cases: exactly those of driver/tests/porous.rs.
-    let bb = SolidOperatorChoice::BounceBack;
+    let bb = SolidOperator::NonEquilibriumBounceBack;
     drag_rows(&[20, 40], &[0.2, 0.4], 0.8, bb, true);
     drag_rows(
         &[20, 40],
         &[0.2, 0.4],
         0.8,
-        SolidOperatorChoice::MovingWall,
+        SolidOperator::MovingWallBounceBack,
         true,
     );
     drag_rows(
         &[20, 40],
         &[0.2, 0.4],
         0.8,
-        SolidOperatorChoice::Linearized,
+        SolidOperator::LinearizedNonEquilibriumBounceBack,
         true,
     );
     reynolds_rows(40, &[0.01, 1.0, 10.0], 0.011, 0.6);
@@ -205,7 +195,7 @@ fn main() {
     drag_rows(&[20, 40, 80], &[0.2, 0.3, 0.4, 0.5, 0.6], 0.8, bb, false);
     drag_rows(&[20, 40], &[0.4], 0.6, bb, false);
     // Ω₂ (superposition) leaks: far lower drag at the same resolution.
-    let sup = SolidOperatorChoice::Superposition;
+    let sup = SolidOperator::Superposition;
     drag_rows(&[20, 40], &[0.4], 0.8, sup, false);
     reynolds_rows(
         80,

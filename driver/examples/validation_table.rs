@@ -2,8 +2,9 @@
 //!
 //! Runs the same cases as `driver/tests/poiseuille.rs` (which asserts the tolerances listed here) and prints
 //! a markdown table: case, measured error, tolerance asserted by the test.
-use lbdem::channel::{run_channel, ChannelOutcome, ChannelSetup};
-use lbdem::scene::Scene;
+use lbdem::engine::exec::Exec;
+use lbdem::kinds::channel::{simulate, Channel, ChannelOutcome, ChannelScene, ChannelSetup};
+use lbdem::run::Case;
 
 fn solve(
     ny: usize,
@@ -26,10 +27,10 @@ fn solve(
          tau = {tau:e}\n[channel]\nlength = {length:e}\nwidth = {ny}.0\ndrive = \"{drive}\"\n{key} = {strength:e}\n\
          [run]\nsteps = {steps}\nsteady_tolerance = 1e-13\ncheck_interval = 100\n"
     );
-    let scene = Scene::from_toml(&text, "validation").expect("scene");
-    let setup = ChannelSetup::new(&scene).expect("setup");
-    let out = run_channel::<f64>(&setup, Some(1e-13), 100, "validation", |_| {}).expect("run");
-    (setup, out)
+    let case = Case::<Channel>::new(ChannelScene::from_toml(&text, "validation").expect("scene"))
+        .expect("setup");
+    let out = simulate(&case, &Exec::default()).expect("run");
+    (case.setup, out)
 }
 
 fn slope(points: &[(f64, f64)]) -> f64 {

@@ -114,3 +114,40 @@ impl LbdemError {
 
 /// Result alias of the driver.
 pub type Result<T> = std::result::Result<T, LbdemError>;
+
+/// Check that a scene value is finite and > 0, naming the field and giving a hint otherwise.
+pub fn positive(field: &str, v: f64, hint: &str) -> Result<()> {
+    if v.is_finite() && v > 0.0 {
+        Ok(())
+    } else {
+        Err(LbdemError::field(
+            field,
+            v,
+            "must be a finite number > 0",
+            hint,
+        ))
+    }
+}
+
+/// Check that a scene value is finite and >= 0, naming the field and giving a hint otherwise.
+pub fn non_negative(field: &str, v: f64, hint: &str) -> Result<()> {
+    if v.is_finite() && v >= 0.0 {
+        Ok(())
+    } else {
+        Err(LbdemError::field(
+            field,
+            v,
+            "must be a finite number >= 0",
+            hint,
+        ))
+    }
+}
+
+/// Check that a fraction lies in (0, 1], naming the field.
+pub fn fraction(field: &str, v: f64, hint: &str) -> Result<()> {
+    if v > 0.0 && v <= 1.0 {
+        Ok(())
+    } else {
+        Err(LbdemError::field(field, v, "must lie in (0, 1]", hint))
+    }
+}

@@ -93,38 +93,38 @@ struct ExecArgs {
     streaming: Option<String>,
 }
 
-fn configure(exec: ExecArgs) -> bool {
-    let ExecArgs {
-        threads,
-        simd,
-        streaming,
-    } = exec;
-    if let Some(s) = streaming
-        .as_deref()
-        .and_then(lbdem::lattice::Streaming::from_name)
-    {
-        lbdem::lattice::set_default_streaming(s);
+impl ExecArgs {
+    /// The execution settings these options name (refusing unknown names and levels this CPU lacks).
+    fn exec(&self) -> lbdem::error::Result<lbdem::engine::exec::Exec> {
+        lbdem::engine::exec::Exec::from_names(
+            self.threads,
+            self.simd.as_deref(),
+            self.streaming.as_deref(),
+        )
     }
-    if let Some(name) = simd {
-        let level = lbdem::exec::SimdLevel::from_name(&name);
-        if let Err(e) = level
-            .ok_or(format!("--simd {name}: unknown level"))
-            .and_then(lbdem::exec::set_default_level)
-        {
-            eprintln!("lbdem: error: {e}");
-            return false;
-        }
-    }
-    if let Some(n) = threads {
-        if let Err(e) = rayon::ThreadPoolBuilder::new()
-            .num_threads(n.max(1))
-            .build_global()
-        {
-            eprintln!("lbdem: cannot set up {n} threads: {e}");
-            return false;
-        }
-    }
-    true
+}
+
+/// Options of `run` and `resume`: the execution settings, the stop request raised by Ctrl-C/SIGTERM, and the
+/// testing aid `LBDEM_TEST_HOLD=STEP:FILE` (see `lbdem::run::RunOptions::hold_at`).
+fn run_options(
+    exec: &ExecArgs,
+    overwrite: bool,
+    quiet: bool,
+) -> lbdem::error::Result<lbdem::app::RunOptions> {
+    let stop = lbdem::run::Stop::new();
+    stop.install_signal_handler();
+    let hold_at = std::env::var("LBDEM_TEST_HOLD").ok().and_then(|v| {
+        let (step, file) = v.split_once(':')?;
+        Some((step.parse().ok()?, PathBuf::from(file)))
+    });
+    Ok(lbdem::app::RunOptions {
+        overwrite,
+        quiet,
+        exec: exec.exec()?,
+        stop,
+        stop_after: None,
+        hold_at,
+    })
 }
 
 fn main() -> ExitCode {
@@ -136,30 +136,19 @@ fn main() -> ExitCode {
             overwrite,
             exec,
             quiet,
-        } => {
-            if !configure(exec) {
-                return ExitCode::FAILURE;
-            }
-            lbdem::longrun::install_interrupt_handler();
-            lbdem::run::run(&scene, &out, &lbdem::run::RunOptions { overwrite, quiet }).map(|_| ())
-        }
-        Command::Resume { dir, exec, quiet } => {
-            if !configure(exec) {
-                return ExitCode::FAILURE;
-            }
-            lbdem::longrun::install_interrupt_handler();
-            lbdem::resume::resume(&dir, quiet)
-        }
-        Command::Check { scene } => lbdem::run::check(&scene).map(|s| print!("{s}")),
-        Command::CompareBreaks { dirs, out } => lbdem::fracture::compare_breaks(&dirs, &out),
+        } => run_options(&exec, overwrite, quiet)
+            .and_then(|opts| lbdem::app::run(&scene, &out, &opts))
+            .map(|_| ()),
+        Command::Resume { dir, exec, quiet } => run_options(&exec, false, quiet)
+            .and_then(|opts| lbdem::app::resume(&dir, &opts))
+            .map(|_| ()),
+        Command::Check { scene } => lbdem::app::check(&scene).map(|s| print!("{s}")),
+        Command::CompareBreaks { dirs, out } => lbdem::kinds::fracture::compare_breaks(&dirs, &out),
         Command::Study {
             study: StudyCommand::SpeedVsError { out, quick, exec },
-        } => {
-            if !configure(exec) {
-                return ExitCode::FAILURE;
-            }
-            lbdem::study::speed_vs_error(&out, quick, true).map(|md| print!("{md}"))
-        }
+        } => exec.exec().and_then(|exec| {
+            lbdem::study::speed_vs_error(&out, quick, true, &exec).map(|md| print!("{md}"))
+        }),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -26,12 +26,14 @@ use std::time::Instant;
 use lbdem_kernels::Real;
 use serde::Serialize;
 
-use crate::channel::{run_channel, ChannelSetup};
+use crate::engine::exec::Exec;
 use crate::error::{LbdemError, Result};
+use crate::kinds::channel::{simulate, Channel, ChannelScene};
+use crate::kinds::cylinder_array::{solve_array_with, ArrayCase};
+use crate::output::plot::{loglog_png, LogLogPlot, Marker, Series};
 use crate::output::write_atomic;
-use crate::plot::{loglog_png, LogLogPlot, Marker, Series};
-use crate::porous::{solve_array, ArrayCase};
-use crate::scene::{Precision, Scene};
+use crate::run::Case;
+use crate::scene::Precision;
 
 /// The problems of the study.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
@@ -76,7 +78,7 @@ impl Problem {
 
 /// Solid fraction of the cylinder-array problem.
 pub const ARRAY_SOLID_FRACTION: f64 = 0.4;
-/// τ of the cylinder-array problem (inside the [0.6, 0.9] band of REFERENCE §1.5).
+/// τ of the cylinder-array problem (inside the τ band 0.6–0.9 where the PSM drag of `driver/tests/porous.rs` was measured).
 pub const ARRAY_TAU: f64 = 0.8;
 /// τ of both channel problems (table 4.1).
 pub const CHANNEL_TAU: f64 = 0.875;
@@ -153,7 +155,7 @@ const POISEUILLE_PRESSURE: &str = include_str!("../../scenes/poiseuille.toml");
 const POISEUILLE_BODY_FORCE: &str = include_str!("../../scenes/poiseuille_body_force.toml");
 
 /// The channel scene of `problem` at `ny` nodes across, in precision `precision`.
-pub fn channel_scene(problem: Problem, ny: usize, precision: Precision) -> Result<Scene> {
+pub fn channel_scene(problem: Problem, ny: usize, precision: Precision) -> Result<ChannelScene> {
     let (text, path) = match problem {
         Problem::PoiseuillePressure => (POISEUILLE_PRESSURE, "scenes/poiseuille.toml"),
         Problem::PoiseuilleBodyForce => {
@@ -176,7 +178,7 @@ pub fn channel_scene(problem: Problem, ny: usize, precision: Precision) -> Resul
             "use 5 or more nodes across the channel",
         ));
     }
-    let mut scene = Scene::from_toml(text, path)?;
+    let mut scene = ChannelScene::from_toml(text, path)?;
     scene.scene.precision = precision;
     scene.fluid.tau = Some(CHANNEL_TAU);
     scene.fluid.timestep = None;
@@ -222,15 +224,15 @@ fn threads() -> usize {
     rayon::current_num_threads()
 }
 
-fn run_channel_case<T: Real>(problem: Problem, ny: usize) -> Result<StudyRow> {
+fn run_channel_case<T: Real>(problem: Problem, ny: usize, exec: &Exec) -> Result<StudyRow> {
     let precision = if T::NAME == "f32" {
         Precision::F32
     } else {
         Precision::F64
     };
-    let scene = channel_scene(problem, ny, precision)?;
-    let setup = ChannelSetup::new(&scene)?;
-    let out = run_channel::<T>(&setup, None, 1000, "speed-vs-error study", |_| {})?;
+    let case = Case::<Channel>::new(channel_scene(problem, ny, precision)?)?;
+    let setup = &case.setup;
+    let out = simulate(&case, exec)?;
     Ok(StudyRow {
         problem,
         precision: T::NAME,
@@ -245,8 +247,8 @@ fn run_channel_case<T: Real>(problem: Problem, ny: usize) -> Result<StudyRow> {
     })
 }
 
-fn array_row<T: Real>(case: &ArrayCase) -> Result<StudyRow> {
-    let r = solve_array::<T>(case)?;
+fn array_row<T: Real>(case: &ArrayCase, exec: &Exec) -> Result<StudyRow> {
+    let r = solve_array_with::<T>(case, exec)?;
     let err = r.drag_error.ok_or_else(|| {
         LbdemError::field(
             "solid_fraction",
@@ -271,27 +273,31 @@ fn array_row<T: Real>(case: &ArrayCase) -> Result<StudyRow> {
 }
 
 /// Run the cylinder array at cell side `l`: f64 to its steady criterion, then f32 for exactly as many steps.
-fn run_array_pair(l: usize) -> Result<[StudyRow; 2]> {
+fn run_array_pair(l: usize, exec: &Exec) -> Result<[StudyRow; 2]> {
     let case = ArrayCase::stokes(l, ARRAY_SOLID_FRACTION, ARRAY_TAU);
-    let r64 = array_row::<f64>(&case)?;
+    let r64 = array_row::<f64>(&case, exec)?;
     let mut fixed = case.clone();
     fixed.max_steps = r64.steps;
     // A zero tolerance is never met: the f32 run takes exactly max_steps (a multiple of the check interval).
     fixed.steady_tolerance = 0.0;
-    let r32 = array_row::<f32>(&fixed)?;
+    let r32 = array_row::<f32>(&fixed, exec)?;
     Ok([r32, r64])
 }
 
 /// Run a plan; `progress(row)` is called after every run.
-pub fn run_study(plan: &StudyPlan, mut progress: impl FnMut(&StudyRow)) -> Result<Vec<StudyRow>> {
+pub fn run_study(
+    plan: &StudyPlan,
+    exec: &Exec,
+    mut progress: impl FnMut(&StudyRow),
+) -> Result<Vec<StudyRow>> {
     let mut rows = Vec::new();
     for (problem, ladder) in &plan.ladders {
         for &n in ladder {
             let pair = match problem {
-                Problem::CylinderArray => run_array_pair(n)?,
+                Problem::CylinderArray => run_array_pair(n, exec)?,
                 p => [
-                    run_channel_case::<f32>(*p, n)?,
-                    run_channel_case::<f64>(*p, n)?,
+                    run_channel_case::<f32>(*p, n, exec)?,
+                    run_channel_case::<f64>(*p, n, exec)?,
                 ],
             };
             for r in pair {
@@ -559,7 +565,11 @@ pub fn plot(rows: &[StudyRow], path: &Path) -> Result<()> {
 
 /// Run the study and write `speed_vs_error.csv`, `speed_vs_error.png` and `speed_vs_error.md` into `out`.
 /// Returns the markdown report (table, recommendations, f32 notes).
-pub fn speed_vs_error(out: &Path, quick: bool, verbose: bool) -> Result<String> {
+pub fn speed_vs_error(out: &Path, quick: bool, verbose: bool, exec: &Exec) -> Result<String> {
+    exec.install(|| speed_vs_error_in_pool(out, quick, verbose, exec))?
+}
+
+fn speed_vs_error_in_pool(out: &Path, quick: bool, verbose: bool, exec: &Exec) -> Result<String> {
     std::fs::create_dir_all(out).map_err(|e| LbdemError::Write {
         path: out.display().to_string(),
         source: e,
@@ -570,7 +580,7 @@ pub fn speed_vs_error(out: &Path, quick: bool, verbose: bool) -> Result<String> 
         StudyPlan::full()
     };
     let start = Instant::now();
-    let rows = run_study(&plan, |r| {
+    let rows = run_study(&plan, exec, |r| {
         if verbose {
             eprintln!(
                 "  {:<22} {} {:>3}: {:>8} steps {:>8.3} s {:>7.1} MLUPS  error {:.3e}",

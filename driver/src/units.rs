@@ -13,10 +13,128 @@
 //! The dissertation's parameter tables are not all self-consistent (e.g. table 6.2: h = 0.009 cm,
 //! Δt = 1e−5 s, ν = 0.2 cm²/s give τ = 0.574, not the 0.625 listed). lbdem therefore takes h, ν and one of τ
 //! or Δt, derives the other, and prints every derived figure at start-up.
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
-use crate::error::{LbdemError, Result};
-use crate::scene::FluidSection;
+use crate::error::{positive, LbdemError, Result};
+
+/// Unit system of a scene. All inputs of one scene are in the same system; formulas are unit-consistent, so
+/// the choice only sets the labels of the outputs.
+#[derive(Clone, Copy, Debug, Deserialize, Serialize, PartialEq, Eq)]
+#[serde(rename_all = "lowercase")]
+pub enum UnitSystem {
+    /// centimetre, gram, second (dyne, dyne/cm²) — the dissertation's units.
+    Cgs,
+    /// metre, kilogram, second (N, Pa).
+    Si,
+}
+
+impl UnitSystem {
+    /// Label of length, density, pressure, velocity units.
+    pub fn labels(self) -> UnitLabels {
+        match self {
+            UnitSystem::Cgs => UnitLabels {
+                length: "cm",
+                time: "s",
+                density: "g/cm^3",
+                pressure: "dyne/cm^2",
+                velocity: "cm/s",
+                viscosity: "cm^2/s",
+            },
+            UnitSystem::Si => UnitLabels {
+                length: "m",
+                time: "s",
+                density: "kg/m^3",
+                pressure: "Pa",
+                velocity: "m/s",
+                viscosity: "m^2/s",
+            },
+        }
+    }
+}
+
+/// Unit labels for printing.
+#[derive(Clone, Copy, Debug, Serialize)]
+pub struct UnitLabels {
+    /// Length unit.
+    pub length: &'static str,
+    /// Time unit.
+    pub time: &'static str,
+    /// Density unit.
+    pub density: &'static str,
+    /// Pressure unit.
+    pub pressure: &'static str,
+    /// Velocity unit.
+    pub velocity: &'static str,
+    /// Kinematic viscosity unit.
+    pub viscosity: &'static str,
+}
+
+/// `[fluid]`: physical fluid properties and the lattice resolution.
+#[derive(Clone, Debug, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct FluidSection {
+    /// Reference density ρ₀.
+    pub density: f64,
+    /// Kinematic viscosity ν.
+    pub viscosity: f64,
+    /// Lattice spacing h.
+    pub spacing: f64,
+    /// Relaxation time τ (dimensionless). Give this or `timestep`.
+    #[serde(default)]
+    pub tau: Option<f64>,
+    /// Time step Δt. Give this or `tau`.
+    #[serde(default)]
+    pub timestep: Option<f64>,
+}
+
+impl FluidSection {
+    /// Range checks of `[fluid]` that do not need derived quantities (those are in [`LatticeUnits::from_fluid`]).
+    pub fn validate(&self) -> Result<()> {
+        positive(
+            "fluid.density",
+            self.density,
+            "give the fluid density, e.g. 1.0 g/cm^3 for water in cgs",
+        )?;
+        positive(
+            "fluid.viscosity",
+            self.viscosity,
+            "give the kinematic viscosity, e.g. 0.01 cm^2/s for water",
+        )?;
+        positive(
+            "fluid.spacing",
+            self.spacing,
+            "give the lattice spacing h in length units",
+        )?;
+        match (self.tau, self.timestep) {
+            (Some(_), Some(_)) => Err(LbdemError::field(
+                "fluid.tau",
+                "given together with fluid.timestep",
+                "tau and timestep are tied by tau = 1/2 + 3 nu dt / h^2, so only one may be given",
+                "remove one of fluid.tau or fluid.timestep",
+            )),
+            (None, None) => Err(LbdemError::field(
+                "fluid.tau",
+                "missing",
+                "neither fluid.tau nor fluid.timestep is given",
+                "add fluid.tau (e.g. 0.875) or fluid.timestep",
+            )),
+            (Some(t), None) if !(t.is_finite() && t > 0.5) => Err(LbdemError::field(
+                "fluid.tau",
+                t,
+                "BGK is unstable for tau <= 1/2 (the viscosity (tau - 1/2)/3 would be <= 0)",
+                "use tau in (0.5, 2], ideally 0.6-1.0",
+            )),
+            (None, Some(dt)) => positive("fluid.timestep", dt, "give the time step in seconds"),
+            _ => Ok(()),
+        }
+    }
+
+    /// Validate and derive the lattice units.
+    pub fn lattice_units(&self) -> Result<LatticeUnits> {
+        self.validate()?;
+        LatticeUnits::from_fluid(self)
+    }
+}
 
 /// Relaxation time below which BGK is close to its stability limit and a warning is printed.
 pub const TAU_WARN_LOW: f64 = 0.51;
@@ -179,6 +297,76 @@ impl LatticeUnits {
     /// Mach number of a physical speed: u / c_s.
     pub fn mach(&self, u: f64) -> f64 {
         u / self.sound_speed
+    }
+}
+
+/// The map between the DEM's physical frame and a lattice (the coupled step's conversion): lattice node
+/// (0, 0) at the physical point `origin`; x* = (x − origin)/h, u* = u Δt/h, ω* = ω Δt, and lattice forces and
+/// torques back to physical ones, F = F* ρ₀ h³/Δt², T = T* ρ₀ h⁴/Δt² (2-D, per unit thickness).
+#[derive(Clone, Copy, Debug, Serialize, Deserialize)]
+pub struct LatticeMap {
+    /// Lattice spacing h (physical length).
+    pub spacing: f64,
+    /// Fluid time step Δt (physical time).
+    pub timestep: f64,
+    /// Reference fluid density ρ₀ (physical).
+    pub density: f64,
+    /// Physical position of lattice node (0, 0).
+    pub origin: [f64; 2],
+}
+
+impl LatticeMap {
+    /// Lattice units as physical units (h = Δt = ρ₀ = 1, origin 0): for scenes written in lattice units.
+    pub fn identity() -> Self {
+        Self {
+            spacing: 1.0,
+            timestep: 1.0,
+            density: 1.0,
+            origin: [0.0; 2],
+        }
+    }
+
+    /// The map of `units` with lattice node (0, 0) at `origin`.
+    pub fn of(units: &LatticeUnits, origin: [f64; 2]) -> Self {
+        Self {
+            spacing: units.spacing,
+            timestep: units.timestep,
+            density: units.density,
+            origin,
+        }
+    }
+
+    /// Physical position → lattice coordinates (x − origin)/h.
+    pub fn position_to_lattice(&self, x: [f64; 2]) -> [f64; 2] {
+        [
+            (x[0] - self.origin[0]) / self.spacing,
+            (x[1] - self.origin[1]) / self.spacing,
+        ]
+    }
+
+    /// Physical length → lattice length l/h.
+    pub fn length_to_lattice(&self, l: f64) -> f64 {
+        l / self.spacing
+    }
+
+    /// Factor turning a physical velocity into a lattice one, Δt/h.
+    pub fn velocity_scale(&self) -> f64 {
+        self.timestep / self.spacing
+    }
+
+    /// Physical angular velocity → radians per step, ω Δt.
+    pub fn spin_to_lattice(&self, omega: f64) -> f64 {
+        omega * self.timestep
+    }
+
+    /// Factor turning a lattice force into a physical one, ρ₀ h³/Δt².
+    pub fn force_scale(&self) -> f64 {
+        self.density * self.spacing.powi(3) / (self.timestep * self.timestep)
+    }
+
+    /// Factor turning a lattice torque into a physical one, ρ₀ h⁴/Δt².
+    pub fn torque_scale(&self) -> f64 {
+        self.force_scale() * self.spacing
     }
 }
 

@@ -2,8 +2,8 @@
 //! Ladd's correction) against Couette flow, a Zou–He velocity side with a per-node profile against an imposed
 //! parabola, the pressure–pressure channel at high τ (BGK's Λ-dependent error bounded, gone with TRT), bad
 //! profiles refused, and the new sides bitwise identical across streaming schemes, SIMD levels and threads.
-use lbdem::exec::SimdLevel;
-use lbdem::lattice::{FluidLattice, Streaming};
+use lbdem::engine::exec::SimdLevel;
+use lbdem::engine::lattice::{FluidLattice, Streaming};
 use lbdem_kernels::fluid::boundary::{Boundaries, SideCondition};
 use lbdem_kernels::fluid::collide::{Collision, Trt};
 use lbdem_kernels::fluid::lattice::Side;

@@ -9,24 +9,23 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::sync::Mutex;
 
-use lbdem::checkpoint::{Checkpoint, Persist, CHECKPOINT_FILE, DIVERGED_FILE, SCENE_COPY};
-use lbdem::coupled::CoupledWorld;
-use lbdem::coupled_demo::{resume_demo, run_demo, DemoOptions, DemoScene, DemoState, DemoTask};
+use lbdem::app::RunOptions;
+use lbdem::engine::coupled::CoupledWorld;
+use lbdem::engine::dem::{boxed_sample, hexagonal_packing, BondSpec, DemWorld, PlatenControl};
+use lbdem::engine::exec::Exec;
+use lbdem::engine::lattice::{FluidDisc, FluidLattice};
 use lbdem::error::LbdemError;
-use lbdem::lattice::{FluidDisc, FluidLattice};
-use lbdem::longrun::{
-    clear_interrupt, request_interrupt, CheckpointInterval, LongRun, LongTask, OutputStage, RunEnd,
-};
-use lbdem::solid::scene::{resume_dry, DryRunOptions, DryScene};
-use lbdem::solid::{boxed_sample, hexagonal_packing, BondSpec, DemWorld, PlatenControl};
+use lbdem::kinds::coupled_demo::{CoupledDemo, DemoScene, DemoState};
+use lbdem::run::checkpoint::{Checkpoint, Persist, CHECKPOINT_FILE, DIVERGED_FILE, SCENE_COPY};
+use lbdem::run::{Case, CheckpointInterval, Kind, OutputStage, Stop};
+use lbdem::units::UnitLabels;
 use lbdem_kernels::dem::assembly::ContactModel;
 use lbdem_kernels::fluid::boundary::{Boundaries, SideCondition};
 use lbdem_kernels::fluid::collide::{SolidOperator, Weighting};
 use lbdem_kernels::fluid::step::FluidParams;
 use lbdem_kernels::Real;
 
-/// The interrupt flag is process-wide: tests that drive a `LongRun` take this lock so that the one test that
-/// raises the flag cannot stop another test's run.
+/// Tests that run the binary take this lock, so that they do not compete for the two cores with each other.
 static LONG_RUNS: Mutex<()> = Mutex::new(());
 
 fn lock() -> std::sync::MutexGuard<'static, ()> {
@@ -221,7 +220,9 @@ checkpoint_interval = {interval}
 
 #[test]
 fn coupled_world_resumes_bitwise() {
-    let scene = DemoScene::from_toml(&demo_scene(100, "0"), "demo").unwrap();
+    let scene: DemoScene = Case::<CoupledDemo>::read(&demo_scene(100, "0"), "demo")
+        .unwrap()
+        .scene;
     let mut a: CoupledWorld = scene.build_world().unwrap();
     a.applied[1] = ([1e-4, -2e-4], 1e-3);
     a.grain_fluid_radius = vec![1.0, 0.9, 0.8, 0.95];
@@ -253,8 +254,14 @@ fn summary_without_timing(dir: &Path) -> serde_json::Value {
     let mut s: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap();
     let o = s.as_object_mut().unwrap();
-    o.remove("wall_seconds");
-    o.remove("threads");
+    for timing in [
+        "wall_seconds",
+        "execution",
+        "segment_first_step",
+        "scene_file",
+    ] {
+        o.remove(timing);
+    }
     s
 }
 
@@ -284,18 +291,15 @@ fn dry_scene_interrupted_and_resumed_writes_identical_outputs() {
     let root = scratch("dry");
     let path = root.join("input.toml");
     std::fs::write(&path, &text).unwrap();
-    let scene = DryScene::from_toml(&text, "input.toml").unwrap();
-    let quiet = |stop_after| DryRunOptions {
-        overwrite: false,
+    let quiet = |stop_after| RunOptions {
         quiet: true,
         stop_after,
+        ..Default::default()
     };
     let whole = root.join("whole");
-    scene.run_resumable(&path, &whole, &quiet(None)).unwrap();
+    lbdem::app::run(&path, &whole, &quiet(None)).unwrap();
     let cut = root.join("cut");
-    let err = scene
-        .run_resumable(&path, &cut, &quiet(Some(2600)))
-        .unwrap_err();
+    let err = lbdem::app::run(&path, &cut, &quiet(Some(2600))).unwrap_err();
     match &err {
         LbdemError::Interrupted { step, .. } => assert_eq!(*step, 2600),
         e => panic!("expected an interruption, got {e}"),
@@ -311,120 +315,96 @@ fn dry_scene_interrupted_and_resumed_writes_identical_outputs() {
     );
     // A second slice, then to the end.
     assert!(matches!(
-        resume_dry(&cut, true, Some(4000)),
+        lbdem::app::resume(&cut, &quiet(Some(4000))),
         Err(LbdemError::Interrupted { step: 4000, .. })
     ));
-    resume_dry(&cut, true, None).unwrap();
+    lbdem::app::resume(&cut, &quiet(None)).unwrap();
     assert_same_outputs(&whole, &cut);
     // `lbdem run` refuses both directories without --overwrite…
     for dir in [&whole, &cut] {
-        let e = scene
-            .run_resumable(&path, dir, &quiet(None))
+        let e = lbdem::app::run(&path, dir, &quiet(None))
             .unwrap_err()
             .to_string();
         assert!(e.contains("already holds a run"), "{e}");
     }
 }
 
-/// The demo task, raising the interrupt flag (as Ctrl-C would) once `at` steps are done.
-struct CtrlCAt<'a> {
-    inner: DemoTask<'a>,
-    at: u64,
-}
-
-impl LongTask for CtrlCAt<'_> {
-    type State = DemoState;
-    const KIND: &'static str = DemoTask::KIND;
-    fn state(&self) -> &DemoState {
-        self.inner.state()
-    }
-    fn steps_done(&self) -> u64 {
-        self.inner.steps_done()
-    }
-    fn total_steps(&self) -> Option<u64> {
-        self.inner.total_steps()
-    }
-    fn finished(&self) -> bool {
-        self.inner.finished()
-    }
-    fn advance(&mut self, dir: &Path) -> lbdem::error::Result<()> {
-        self.inner.advance(dir)?;
-        if self.steps_done() >= self.at {
-            request_interrupt();
+/// Raise `stop` once the run holding at the marker file (RunOptions::hold_at) has created it.
+fn stop_when_held(marker: &Path, stop: &Stop) -> std::thread::JoinHandle<()> {
+    let (marker, stop) = (marker.to_path_buf(), stop.clone());
+    std::thread::spawn(move || {
+        let t0 = std::time::Instant::now();
+        while !marker.exists() && t0.elapsed().as_secs() < 120 {
+            std::thread::sleep(std::time::Duration::from_millis(2));
         }
-        Ok(())
-    }
-    fn write_outputs(&mut self, dir: &Path, stage: OutputStage) -> lbdem::error::Result<()> {
-        self.inner.write_outputs(dir, stage)
-    }
+        stop.request();
+    })
 }
 
 #[test]
 fn coupled_demo_interrupted_by_the_flag_resumes_to_identical_outputs() {
-    let _guard = lock();
     let text = demo_scene(300, "\"never\"");
-    let scene = DemoScene::from_toml(&text, "demo").unwrap();
     let root = scratch("demo");
-    let opts = DemoOptions {
+    let path = root.join("demo.toml");
+    std::fs::write(&path, &text).unwrap();
+    let quiet = RunOptions {
         quiet: true,
         ..Default::default()
     };
     let whole = root.join("whole");
-    run_demo(&text, "demo", &whole, &opts).unwrap();
+    lbdem::app::run(&path, &whole, &quiet).unwrap();
 
+    // The stop request (what Ctrl-C raises) arrives while the run holds at step 130.
     let cut = root.join("cut");
-    lbdem::longrun::start_run_dir(&cut, &text, false).unwrap();
-    let state = DemoState {
-        world: scene.build_world().unwrap(),
-        rows: Vec::new(),
-    };
-    let mut task = CtrlCAt {
-        inner: DemoTask::new(&scene, state),
-        at: 130,
-    };
-    let driver = LongRun {
-        dir: &cut,
-        scene_text: &text,
-        interval: CheckpointInterval::Never,
+    let marker = root.join("held");
+    let stop = Stop::new();
+    let opts = RunOptions {
         quiet: true,
-        stop_after: None,
+        stop: stop.clone(),
+        hold_at: Some((130, marker.clone())),
+        ..Default::default()
     };
-    let end = driver.run(&mut task);
-    clear_interrupt();
-    assert_eq!(end.unwrap(), RunEnd::Interrupted { step: 130 });
+    let raiser = stop_when_held(&marker, &stop);
+    let end = lbdem::app::run(&path, &cut, &opts);
+    raiser.join().unwrap();
+    assert!(
+        matches!(end, Err(LbdemError::Interrupted { step: 130, .. })),
+        "{end:?}"
+    );
     let rows = std::fs::read_to_string(cut.join("series.csv")).unwrap();
     assert_eq!(
         rows.lines().count(),
         1 + 13,
         "outputs so far written on interrupt"
     );
-    resume_demo(&cut, &opts).unwrap();
+    lbdem::app::resume(&cut, &quiet).unwrap();
     assert_same_outputs(&whole, &cut);
 }
 
 #[test]
 fn damaged_or_mismatched_checkpoints_are_refused_with_clear_errors() {
-    let _guard = lock();
     let text = demo_scene(60, "20");
     let dir = scratch("damaged");
-    let opts = DemoOptions {
+    let path = dir.join("demo.toml");
+    std::fs::write(&path, &text).unwrap();
+    let opts = RunOptions {
         quiet: true,
         stop_after: Some(40),
         ..Default::default()
     };
     assert!(matches!(
-        run_demo(&text, "demo", &dir, &opts),
+        lbdem::app::run(&path, &dir, &opts),
         Err(LbdemError::Interrupted { step: 40, .. })
     ));
     let ckpt = dir.join(CHECKPOINT_FILE);
     let good = std::fs::read(&ckpt).unwrap();
-    let quiet = DemoOptions {
+    let quiet = RunOptions {
         quiet: true,
         ..Default::default()
     };
     let resume_err = |bytes: &[u8]| {
         std::fs::write(&ckpt, bytes).unwrap();
-        let e = resume_demo(&dir, &quiet).unwrap_err();
+        let e = lbdem::app::resume(&dir, &quiet).unwrap_err();
         assert!(matches!(e, LbdemError::Checkpoint { .. }), "{e}");
         e.to_string()
     };
@@ -451,7 +431,7 @@ fn damaged_or_mismatched_checkpoints_are_refused_with_clear_errors() {
     // An edited scene copy.
     std::fs::write(&ckpt, &good).unwrap();
     std::fs::write(dir.join(SCENE_COPY), text.replace("tau = 0.8", "tau = 0.9")).unwrap();
-    let e = resume_demo(&dir, &quiet).unwrap_err().to_string();
+    let e = lbdem::app::resume(&dir, &quiet).unwrap_err().to_string();
     assert!(
         e.contains("another scene") && e.contains("scene.toml"),
         "{e}"
@@ -464,65 +444,90 @@ fn damaged_or_mismatched_checkpoints_are_refused_with_clear_errors() {
     assert!(e.contains("`coupled_demo` run, not a `dry` run"), "{e}");
     // A missing checkpoint.
     std::fs::remove_file(&ckpt).unwrap();
-    let e = lbdem::resume::resume(&dir, true).unwrap_err().to_string();
+    let e = lbdem::app::resume(&dir, &quiet).unwrap_err().to_string();
     assert!(e.contains("does not exist"), "{e}");
 }
 
-/// The demo task, poisoning one fluid population once `at` steps are done.
-struct PoisonAt<'a> {
-    inner: DemoTask<'a>,
-    at: u64,
+/// The coupled demo, with one fluid population poisoned once 70 steps are done.
+struct PoisonedDemo;
+
+impl Kind for PoisonedDemo {
+    const NAME: &'static str = CoupledDemo::NAME;
+    type Scene = <CoupledDemo as Kind>::Scene;
+    type Setup = <CoupledDemo as Kind>::Setup;
+    type State = <CoupledDemo as Kind>::State;
+    fn validate(scene: &Self::Scene) -> lbdem::error::Result<()> {
+        CoupledDemo::validate(scene)
+    }
+    fn setup(scene: &Self::Scene) -> lbdem::error::Result<Self::Setup> {
+        CoupledDemo::setup(scene)
+    }
+    fn describe(case: &Case<Self>) -> String {
+        CoupledDemo::describe(&demo(case))
+    }
+    fn units(scene: &Self::Scene) -> UnitLabels {
+        CoupledDemo::units(scene)
+    }
+    fn checkpoint_interval(scene: &Self::Scene) -> CheckpointInterval {
+        CoupledDemo::checkpoint_interval(scene)
+    }
+    fn start(case: &Case<Self>, exec: &Exec) -> lbdem::error::Result<DemoState> {
+        CoupledDemo::start(&demo(case), exec)
+    }
+    fn resume(case: &Case<Self>, s: &mut DemoState, exec: &Exec) -> lbdem::error::Result<()> {
+        CoupledDemo::resume(&demo(case), s, exec)
+    }
+    fn steps_done(s: &DemoState) -> u64 {
+        CoupledDemo::steps_done(s)
+    }
+    fn total_steps(case: &Case<Self>, s: &DemoState) -> Option<u64> {
+        CoupledDemo::total_steps(&demo(case), s)
+    }
+    fn finished(case: &Case<Self>, s: &DemoState) -> bool {
+        CoupledDemo::finished(&demo(case), s)
+    }
+    fn advance(
+        case: &Case<Self>,
+        s: &mut DemoState,
+        dir: Option<&Path>,
+    ) -> lbdem::error::Result<()> {
+        if s.world.steps() == 70 {
+            s.world.fluid.populations_mut()[5 * 40 + 3] = f64::NAN;
+        }
+        CoupledDemo::advance(&demo(case), s, dir)
+    }
+    fn health(case: &Case<Self>, s: &DemoState) -> lbdem::error::Result<()> {
+        CoupledDemo::health(&demo(case), s)
+    }
+    fn write_outputs(
+        case: &Case<Self>,
+        s: &DemoState,
+        dir: &Path,
+        stage: OutputStage,
+    ) -> lbdem::error::Result<()> {
+        CoupledDemo::write_outputs(&demo(case), s, dir, stage)
+    }
+    fn results(case: &Case<Self>, s: &DemoState) -> lbdem::error::Result<serde_json::Value> {
+        CoupledDemo::results(&demo(case), s)
+    }
 }
 
-impl LongTask for PoisonAt<'_> {
-    type State = DemoState;
-    const KIND: &'static str = DemoTask::KIND;
-    fn state(&self) -> &DemoState {
-        self.inner.state()
-    }
-    fn steps_done(&self) -> u64 {
-        self.inner.steps_done()
-    }
-    fn total_steps(&self) -> Option<u64> {
-        self.inner.total_steps()
-    }
-    fn finished(&self) -> bool {
-        self.inner.finished()
-    }
-    fn advance(&mut self, dir: &Path) -> lbdem::error::Result<()> {
-        if self.steps_done() == self.at {
-            self.inner.state.world.fluid.populations_mut()[5 * 40 + 3] = f64::NAN;
-        }
-        self.inner.advance(dir)
-    }
-    fn write_outputs(&mut self, dir: &Path, stage: OutputStage) -> lbdem::error::Result<()> {
-        self.inner.write_outputs(dir, stage)
+fn demo(case: &Case<PoisonedDemo>) -> Case<CoupledDemo> {
+    Case {
+        scene: case.scene.clone(),
+        setup: case.setup.clone(),
     }
 }
 
 #[test]
 fn a_diverging_run_stops_with_a_message_and_keeps_the_last_good_checkpoint() {
-    let _guard = lock();
     let text = demo_scene(200, "30");
-    let scene = DemoScene::from_toml(&text, "demo").unwrap();
     let dir = scratch("diverge");
-    lbdem::longrun::start_run_dir(&dir, &text, false).unwrap();
-    let state = DemoState {
-        world: scene.build_world().unwrap(),
-        rows: Vec::new(),
-    };
-    let mut task = PoisonAt {
-        inner: DemoTask::new(&scene, state),
-        at: 70,
-    };
-    let driver = LongRun {
-        dir: &dir,
-        scene_text: &text,
-        interval: CheckpointInterval::Steps(30),
+    let quiet = RunOptions {
         quiet: true,
-        stop_after: None,
+        ..Default::default()
     };
-    let e = driver.run(&mut task).unwrap_err();
+    let e = lbdem::run::run::<PoisonedDemo>(&text, "demo.toml", &dir, &quiet).unwrap_err();
     let msg = e.to_string();
     match e {
         LbdemError::Diverged { step, x, y, .. } => {
@@ -533,7 +538,7 @@ fn a_diverging_run_stops_with_a_message_and_keeps_the_last_good_checkpoint() {
         other => panic!("expected divergence, got {other}"),
     }
     assert!(
-        msg.contains("fluid density") && msg.contains("diverged_state.bin"),
+        msg.contains("density") && msg.contains("diverged_state.bin"),
         "{msg}"
     );
     let header = Checkpoint::read_header(&dir.join(CHECKPOINT_FILE)).unwrap();
@@ -547,14 +552,7 @@ fn a_diverging_run_stops_with_a_message_and_keeps_the_last_good_checkpoint() {
     let rows = std::fs::read_to_string(dir.join("series.csv")).unwrap();
     assert_eq!(rows.lines().count(), 1 + 7, "rows up to step 70 are kept");
     // Resuming from the last good checkpoint finishes (the poison was not in it).
-    resume_demo(
-        &dir,
-        &DemoOptions {
-            quiet: true,
-            ..Default::default()
-        },
-    )
-    .unwrap();
+    lbdem::app::resume(&dir, &quiet).unwrap();
     assert!(dir.join("summary.json").exists());
 }
 
@@ -569,8 +567,9 @@ fn checkpoint_interval_parses_steps_durations_and_never() {
     assert_eq!(parse("never"), Ok(Never));
     let e = parse("soon").unwrap_err();
     assert!(e.contains("run.checkpoint_interval"), "{e}");
-    let e = DemoScene::from_toml(&demo_scene(10, "\"often\""), "demo.toml")
-        .unwrap_err()
+    let e = Case::<CoupledDemo>::read(&demo_scene(10, "\"often\""), "demo.toml")
+        .err()
+        .unwrap()
         .to_string();
     assert!(e.contains("checkpoint_interval"), "{e}");
 }
@@ -604,12 +603,12 @@ fn cli_resume_and_overwrite() {
 
     // An interrupted run (written through the library), finished by the binary.
     let cut = root.join("cut");
-    let opts = DemoOptions {
+    let opts = RunOptions {
         quiet: true,
         stop_after: Some(170),
         ..Default::default()
     };
-    assert!(run_demo(&text, scene.to_str().unwrap(), &cut, &opts).is_err());
+    assert!(lbdem::app::run(&scene, &cut, &opts).is_err());
     let o = run(&cut, &[]);
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(!o.status.success() && err.contains("lbdem resume"), "{err}");
@@ -687,16 +686,11 @@ fn cli_ctrl_c_writes_a_checkpoint_and_resume_finishes_identically() {
         .unwrap();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let whole = root.join("whole");
-    run_demo(
-        &text,
-        scene.to_str().unwrap(),
-        &whole,
-        &DemoOptions {
-            quiet: true,
-            ..Default::default()
-        },
-    )
-    .unwrap();
+    let quiet = RunOptions {
+        quiet: true,
+        ..Default::default()
+    };
+    lbdem::app::run(&scene, &whole, &quiet).unwrap();
     assert_same_outputs(&whole, &out);
 }
 
@@ -718,17 +712,16 @@ fn dry_boundary_stress_test_in_f32_resumes_to_identical_outputs() {
     let root = scratch("dry32");
     let path = root.join("input.toml");
     std::fs::write(&path, &text).unwrap();
-    let scene = DryScene::from_toml(&text, "input.toml").unwrap();
-    let opts = |stop_after| DryRunOptions {
-        overwrite: false,
+    let opts = |stop_after| RunOptions {
         quiet: true,
         stop_after,
+        ..Default::default()
     };
     let whole = root.join("whole");
-    scene.run_resumable(&path, &whole, &opts(None)).unwrap();
+    lbdem::app::run(&path, &whole, &opts(None)).unwrap();
     let cut = root.join("cut");
     assert!(matches!(
-        scene.run_resumable(&path, &cut, &opts(Some(700))),
+        lbdem::app::run(&path, &cut, &opts(Some(700))),
         Err(LbdemError::Interrupted { step: 700, .. })
     ));
     assert_eq!(
@@ -737,6 +730,6 @@ fn dry_boundary_stress_test_in_f32_resumes_to_identical_outputs() {
             .precision,
         4
     );
-    resume_dry(&cut, true, None).unwrap();
+    lbdem::app::resume(&cut, &opts(None)).unwrap();
     assert_same_outputs(&whole, &cut);
 }

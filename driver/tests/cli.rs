@@ -62,7 +62,7 @@ fn good_scene_writes_summary_and_profile_and_refuses_to_overwrite() {
         serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
     assert_eq!(summary["steps"], 300);
     assert!(summary["derived"]["units"]["tau"].as_f64().unwrap() == 0.875);
-    assert!(summary["error_vs_analytical"]["l2_relative"]
+    assert!(summary["results"]["error_vs_analytical"]["l2_relative"]
         .as_f64()
         .unwrap()
         .is_finite());
@@ -179,7 +179,8 @@ fn every_simd_level_the_cpu_has_writes_the_same_profile_and_unknown_levels_are_r
         let out = dir.join(level);
         let o = run_quietly(&scene, &out, &["--simd", level]);
         let err = String::from_utf8_lossy(&o.stderr);
-        let available = lbdem::exec::SimdLevel::from_name(level).is_some_and(|l| l.available());
+        let available =
+            lbdem::engine::exec::SimdLevel::from_name(level).is_some_and(|l| l.available());
         if available {
             assert!(o.status.success(), "--simd {level} failed: {err}");
             profiles.push(std::fs::read(out.join("profile.csv")).unwrap());
@@ -221,7 +222,7 @@ fn both_streaming_schemes_write_the_same_profile_and_say_which_ran() {
         profiles.push(std::fs::read(out.join("profile.csv")).unwrap());
         let summary: serde_json::Value =
             serde_json::from_slice(&std::fs::read(out.join("summary.json")).unwrap()).unwrap();
-        assert_eq!(summary["streaming"], scheme);
+        assert_eq!(summary["execution"]["streaming"], scheme);
     }
     assert_eq!(profiles[0], profiles[1], "profiles differ between schemes");
     let o = lbdem()

@@ -1,7 +1,7 @@
 //! The coupled LB–DEM step: momentum balance of the partially-saturated coupling with a moving grain.
-use lbdem::coupled::{CoupledWorld, LatticeMap};
-use lbdem::lattice::FluidLattice;
-use lbdem::solid::DemWorld;
+use lbdem::engine::coupled::{CoupledWorld, LatticeMap};
+use lbdem::engine::dem::DemWorld;
+use lbdem::engine::lattice::FluidLattice;
 use lbdem_kernels::dem::assembly::ContactModel;
 use lbdem_kernels::dem::shape::Particle;
 use lbdem_kernels::fluid::boundary::Boundaries;

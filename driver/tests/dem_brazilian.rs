@@ -19,7 +19,7 @@
 //! UCS/σ_t = 5.52, inside the BPM's 4–8 (REFERENCE §7.4), far below rock's ≈ 20.
 use std::sync::OnceLock;
 
-use lbdem::solid::*;
+use lbdem::engine::dem::*;
 use lbdem_kernels::dem::bond::BreakMode;
 
 const BOND_STIFFNESS: f64 = 2.8e5;

@@ -2,9 +2,10 @@
 //! writing stress_strain.csv, broken_bonds.csv, VTK snapshots and summary.json.
 use std::path::PathBuf;
 
-use lbdem::run::{check, run, RunOptions};
-use lbdem::solid::scene::DryScene;
-use lbdem::solid::vtk::parse_particles_vtk;
+use lbdem::app::{check, run, RunOptions};
+use lbdem::kinds::dry::Dry;
+use lbdem::output::vtk::parse_particles_vtk;
+use lbdem::run::Case;
 
 const BUNDLED: &str = include_str!("../../scenes/uniaxial_compression.toml");
 
@@ -52,13 +53,10 @@ fn bad_fields_are_named() {
     for (from, to, field) in cases {
         assert!(BUNDLED.contains(from), "{from}");
         let text = BUNDLED.replacen(from, to, 1);
-        let err = match DryScene::from_toml(&text, "test.toml") {
-            Err(e) => e.to_string(),
-            Ok(s) => s
-                .check(std::path::Path::new("test.toml"))
-                .unwrap_err()
-                .to_string(),
-        };
+        let err = Case::<Dry>::read(&text, "test.toml")
+            .err()
+            .expect("refused")
+            .to_string();
         assert!(err.contains(field), "{field}: {err}");
     }
 }
@@ -77,6 +75,7 @@ fn small_dry_run_writes_its_outputs() {
         &RunOptions {
             overwrite: true,
             quiet: true,
+            ..Default::default()
         },
     )
     .unwrap();
@@ -90,7 +89,7 @@ fn small_dry_run_writes_its_outputs() {
     assert!(curve.lines().count() > 10);
     let breaks = std::fs::read_to_string(out.join("broken_bonds.csv")).unwrap();
     assert_eq!(breaks.lines().count(), broken + 1);
-    let particles = summary["derived"]["particles"].as_u64().unwrap() as usize;
+    let particles = results["particles"].as_u64().unwrap() as usize;
     let snapshots = results["vtk_snapshots"].as_u64().unwrap() as usize;
     assert!(snapshots >= 2);
     let last =
@@ -112,6 +111,7 @@ fn small_dry_run_writes_its_outputs() {
         &RunOptions {
             overwrite: false,
             quiet: true,
+            ..Default::default()
         },
     );
     assert!(again.is_err());
@@ -140,6 +140,7 @@ fn fracture_test_dry_control_breaks_no_bonds() {
         &RunOptions {
             overwrite: true,
             quiet: true,
+            ..Default::default()
         },
     )
     .unwrap();

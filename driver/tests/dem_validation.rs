@@ -23,8 +23,8 @@
 //! dσ₁/dσ₃ = 1.29 [1.50] (μ = 0.1) and 3.09 [3.47] (μ = 1.0) between σ₃ = 25 and 150 dyne/cm.
 use std::sync::OnceLock;
 
-use lbdem::solid::vtk::{parse_particles_vtk, particles_vtk};
-use lbdem::solid::*;
+use lbdem::engine::dem::*;
+use lbdem::output::vtk::{parse_particles_vtk, particles_vtk};
 use lbdem_kernels::dem::assembly::ContactModel;
 use lbdem_kernels::dem::bond::BreakMode;
 

@@ -1,7 +1,7 @@
 //! Same scene ⇒ bitwise-identical results whatever the number of threads, the band size, or the instruction
 //! set the bulk pass is compiled for (DESIGN §4).
-use lbdem::exec::SimdLevel;
-use lbdem::lattice::{FluidDisc, FluidLattice};
+use lbdem::engine::exec::SimdLevel;
+use lbdem::engine::lattice::{FluidDisc, FluidLattice};
 use lbdem_kernels::fluid::boundary::{Boundaries, SideCondition};
 use lbdem_kernels::fluid::collide::{SolidOperator, Weighting};
 use lbdem_kernels::fluid::step::FluidParams;
@@ -168,11 +168,16 @@ fn an_instruction_set_the_cpu_lacks_is_refused_with_the_option_named() {
                 assert!(e.to_string().contains("simd"), "{e}");
             }
         }
-        assert!(lbdem::exec::set_default_level(level).is_ok() == level.available());
+        let exec = lbdem::engine::exec::Exec::from_names(None, Some(level.name()), None);
+        assert!(exec.is_ok() == level.available());
+        if let Err(e) = exec {
+            assert!(e.to_string().contains("--simd"), "{e}");
+        }
     }
-    // Leave the process default where it started (the widest level), for the other tests of this binary.
-    assert!(lbdem::exec::set_default_level(SimdLevel::detect()).is_ok());
-    assert_eq!(lbdem::exec::default_level(), SimdLevel::detect());
+    assert_eq!(
+        lbdem::engine::exec::Exec::default().simd,
+        SimdLevel::detect()
+    );
 }
 
 #[test]

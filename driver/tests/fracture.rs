@@ -7,8 +7,10 @@
 use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
 
-use lbdem::fracture::{resume_fracture, FractureRun, FractureScene};
-use lbdem::solid::packing::Packing;
+use lbdem::app::RunOptions;
+use lbdem::engine::dem::packing::Packing;
+use lbdem::kinds::fracture::{pack, start_packed, FractureScene, FractureTest};
+use lbdem::run::Case;
 use serde_json::Value;
 
 fn quick(name: &str) -> PathBuf {
@@ -18,9 +20,29 @@ fn quick(name: &str) -> PathBuf {
 }
 
 fn load(path: &Path) -> FractureScene {
-    FractureScene::load_if_fracture(path)
+    let text = std::fs::read_to_string(path).expect("scene file");
+    Case::<FractureTest>::read(&text, &path.display().to_string())
         .expect("valid scene")
-        .expect("a fracture scene")
+        .scene
+}
+
+/// `lbdem run` of the scene file `path` into `out`, starting from the shared packing; stopped (as if
+/// interrupted) after `stop_after` steps when given.
+fn run_with(path: &Path, out: &Path, stop_after: Option<u64>) -> lbdem::error::Result<Value> {
+    let text = std::fs::read_to_string(path).expect("scene file");
+    let opts = RunOptions {
+        overwrite: true,
+        quiet: true,
+        stop_after,
+        ..Default::default()
+    };
+    lbdem::run::run_from::<FractureTest>(
+        &text,
+        &path.display().to_string(),
+        out,
+        &opts,
+        |case, exec| start_packed(case, exec, packing()),
+    )
 }
 
 fn out_dir(name: &str) -> PathBuf {
@@ -32,7 +54,7 @@ fn out_dir(name: &str) -> PathBuf {
 /// The quick sample, packed once.
 fn packing() -> Packing<f64> {
     static P: OnceLock<Packing<f64>> = OnceLock::new();
-    P.get_or_init(|| FractureRun::pack(&load(&quick("base"))).expect("packing"))
+    P.get_or_init(|| pack(&load(&quick("base"))).expect("packing"))
         .clone()
 }
 
@@ -46,9 +68,7 @@ fn run_scene(path: &Path, name: &str) -> (PathBuf, Value) {
         "{name}: [packing]/[solid] differ from quick/base.toml"
     );
     let out = out_dir(name);
-    let summary = scene
-        .run_with(path, &out, true, true, Some(packing()), None)
-        .expect("run");
+    let summary = run_with(path, &out, None).expect("run");
     (out, summary)
 }
 
@@ -171,7 +191,7 @@ fn base_test_breaks_bonds_into_fractures_perpendicular_to_the_least_stress() {
     }
     let lattice = std::fs::read(out.join("lattice_0000.vtk")).unwrap();
     assert!(lattice.starts_with(b"# vtk DataFile Version 3.0"));
-    let nodes = s["fluid"]["nodes"].as_array().unwrap();
+    let nodes = s["results"]["fluid"]["nodes"].as_array().unwrap();
     let n = nodes[0].as_u64().unwrap() * nodes[1].as_u64().unwrap();
     // Three float scalars/vectors per node (1 + 3 + 1 floats of 4 bytes) plus the text headers.
     assert!(lattice.len() as u64 > 20 * n && (lattice.len() as u64) < 20 * n + 2000);
@@ -252,7 +272,7 @@ fn permeability_study_follows_the_dissertations_trends() {
     );
     // The runs overlaid, as `lbdem compare-breaks` draws them.
     let png = out_dir("compare").with_extension("png");
-    lbdem::fracture::compare_breaks(&dirs, &png).expect("comparison figure");
+    lbdem::kinds::fracture::compare_breaks(&dirs, &png).expect("comparison figure");
     let bytes = std::fs::read(&png).unwrap();
     assert!(bytes.starts_with(b"\x89PNG") && bytes.len() > 5000);
 }
@@ -301,24 +321,24 @@ fn same_files(a: &Path, b: &Path) {
 fn an_interrupted_run_resumes_bitwise_identically() {
     // 0.004 s = 200 coupled steps, records every 25 steps; stopped after 100 and resumed.
     let path = short_scene("resume", 0.004);
-    let scene = load(&path);
     let whole = out_dir("resume-whole");
-    scene
-        .run_with(&path, &whole, true, true, Some(packing()), None)
-        .expect("uninterrupted run");
+    run_with(&path, &whole, None).expect("uninterrupted run");
     let cut = out_dir("resume-cut");
-    let stopped = scene.run_with(&path, &cut, true, true, Some(packing()), Some(100));
+    let stopped = run_with(&path, &cut, Some(100));
     assert!(stopped.is_err(), "a stopped run reports the interruption");
     assert!(cut.join("checkpoint.bin").exists());
     assert!(!cut.join("summary.json").exists());
-    resume_fracture(&cut, true).expect("resume");
+    let quiet = RunOptions {
+        quiet: true,
+        ..Default::default()
+    };
+    lbdem::app::resume(&cut, &quiet).expect("resume");
     same_files(&whole, &cut);
 }
 
 #[test]
 fn results_do_not_depend_on_the_thread_count() {
     let path = short_scene("threads", 0.002);
-    let scene = load(&path);
     let mut dirs = Vec::new();
     for threads in [1, 2] {
         let dir = out_dir(&format!("threads-{threads}"));
@@ -326,11 +346,7 @@ fn results_do_not_depend_on_the_thread_count() {
             .num_threads(threads)
             .build()
             .unwrap();
-        pool.install(|| {
-            scene
-                .run_with(&path, &dir, true, true, Some(packing()), None)
-                .expect("run")
-        });
+        pool.install(|| run_with(&path, &dir, None).expect("run"));
         dirs.push(dir);
     }
     same_files(&dirs[0], &dirs[1]);

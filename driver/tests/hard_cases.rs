@@ -3,9 +3,9 @@
 //! the field — never silent garbage.
 mod common;
 
-use common::lattice_channel;
-use lbdem::channel::{run_channel, ChannelSetup};
+use common::{lattice_channel, run_channel};
 use lbdem::error::LbdemError;
+use lbdem::kinds::channel::ChannelSetup;
 
 fn field_of(err: LbdemError) -> String {
     match err {
@@ -49,7 +49,7 @@ fn tau_just_above_one_half_runs_finite_and_is_warned() {
         "{:?}",
         setup.warnings
     );
-    let out = run_channel::<f64>(&setup, None, 1000, "test", |_| {}).expect("stays healthy");
+    let out = run_channel(&scene, None, 1000).expect("stays healthy");
     assert!(out.profile.iter().all(|r| r[1].is_finite()));
     // After 20 000 steps (half a diffusion time) the flow has developed partially: between 20 % and 100 % of
     // the analytical flux. Anything outside would mean blow-up or a broken forcing.
@@ -73,7 +73,7 @@ fn mach_0_3_body_force_channel_runs_and_matches_the_slip_solution() {
         setup.warnings.0.iter().any(|w| w.contains("Mach")),
         "Ma 0.3 must be warned about"
     );
-    let out = run_channel::<f64>(&setup, Some(1e-13), 100, "test", |_| {}).expect("stays healthy");
+    let out = run_channel(&scene, Some(1e-13), 100).expect("stays healthy");
     let slip = (16.0 * (tau - 0.5f64).powi(2) - 3.0).abs() / (3.0 * (ny * ny) as f64);
     assert!(
         out.l2_error < 1.5 * slip + 1e-6,
@@ -115,7 +115,7 @@ fn a_diverging_run_stops_with_step_location_and_quantity() {
     match ChannelSetup::new(&scene) {
         // Refusing on density drop is also a clear, correct outcome.
         Err(e) => assert_eq!(field_of(e), "channel.pressure_drop"),
-        Ok(setup) => match run_channel::<f64>(&setup, None, 100, "out/x", |_| {}) {
+        Ok(_) => match run_channel(&scene, None, 100) {
             Err(LbdemError::Diverged { step, quantity, .. }) => {
                 assert!(step > 0);
                 assert!(quantity.contains("density"));

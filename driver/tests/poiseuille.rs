@@ -6,8 +6,8 @@
 //! d'Humières 2003). So the error is second order in 1/H and vanishes at τ* = ½ + √(3/16).
 mod common;
 
-use common::{lattice_channel, loglog_slope};
-use lbdem::channel::{run_channel, ChannelSetup};
+use common::{lattice_channel, loglog_slope, run_channel};
+use lbdem::kinds::channel::ChannelSetup;
 
 /// Steady-state run in lattice units; returns (setup, outcome).
 fn solve(
@@ -16,7 +16,7 @@ fn solve(
     tau: f64,
     drive: &str,
     strength: f64,
-) -> (ChannelSetup, lbdem::channel::ChannelOutcome) {
+) -> (ChannelSetup, lbdem::kinds::channel::ChannelOutcome) {
     // Enough steps for ~35 e-foldings of the slowest viscous mode (time constant H²/(π² ν)), plus the
     // acoustic transient along a pressure-driven channel.
     let nu = (tau - 0.5) / 3.0;
@@ -25,15 +25,14 @@ fn solve(
         + 2000;
     let scene = lattice_channel(ny, nx, tau, drive, strength, steps, 1e-13);
     let setup = ChannelSetup::new(&scene).expect("valid scene");
-    let out =
-        run_channel::<f64>(&setup, Some(1e-13), 100, "test", |_| {}).expect("run stays healthy");
+    let out = run_channel(&scene, Some(1e-13), 100).expect("run stays healthy");
     (setup, out)
 }
 
 /// The exact LB solution predicted by the slip formula, relative L2 difference from the simulation.
 fn l2_against_slip_prediction(
     setup: &ChannelSetup,
-    out: &lbdem::channel::ChannelOutcome,
+    out: &lbdem::kinds::channel::ChannelOutcome,
     tau: f64,
 ) -> f64 {
     let nu = (tau - 0.5) / 3.0;

@@ -2,22 +2,35 @@
 //! through a slab of fixed grains. Each runs its bundled scene file.
 use std::path::Path;
 
-use lbdem::poro::{
-    fit_diffusivity, omega3_free_grain_growth, run_pressure_diffusion, run_terminal_velocity,
-    slab_mean_pressure, slab_pressure, PoroScene,
-};
-use lbdem::porous::SolidOperatorChoice;
+use lbdem::kinds::consolidation::{self, Consolidation};
+use lbdem::kinds::fluid_compressibility::{self, FluidCompressibility};
+use lbdem::kinds::pressure_diffusion::{self, PressureDiffusion};
+use lbdem::kinds::terminal_velocity::{self, omega3_free_grain_growth, TerminalVelocity};
+use lbdem::observe::fit::fit_diffusivity;
+use lbdem::run::{Case, Kind};
+use lbdem::scene::UnitsSetup;
+use lbdem_kernels::fluid::collide::SolidOperator;
+use lbdem_reference::analytic::{slab_mean_pressure, slab_pressure};
 
-fn scene(name: &str) -> PoroScene {
+fn text(name: &str) -> String {
     let p = Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("../scenes")
         .join(name);
-    PoroScene::load(&p).unwrap()
+    std::fs::read_to_string(p).unwrap()
+}
+
+fn scene<K: Kind>(name: &str) -> K::Scene {
+    Case::<K>::read(&text(name), name).unwrap().scene
+}
+
+fn case<K: Kind>(name: &str) -> Case<K> {
+    Case::<K>::read(&text(name), name).unwrap()
 }
 
 #[test]
 fn free_disc_conserves_momentum_exactly_and_reaches_the_sangani_acrivos_slip() {
-    let o = run_terminal_velocity(&scene("terminal_velocity.toml")).unwrap();
+    let o =
+        terminal_velocity::simulate(&case::<TerminalVelocity>("terminal_velocity.toml")).unwrap();
     // Total momentum = initial + Σ (F_a + g Σ_n (1 − B_n)) exactly: each step moves ~2e-3 between grain and fluid;
     // only roundoff of the sums over 1 600 nodes × 9 populations remains (~1e-13 absolute per step, measured
     // 1e-12 relative to F_a t over 5 000 steps). 1e-9 relative leaves room and still catches any missing impulse
@@ -56,17 +69,22 @@ fn omega3_is_refused_for_a_free_grain_because_it_is_unstable() {
         "duration = 0.605",
         "duration = 0.605\nsolid_operator = \"moving_wall\"",
     );
-    let err = PoroScene::from_toml(&text, "inline")
-        .unwrap_err()
+    let err = Case::<TerminalVelocity>::read(&text, "inline")
+        .err()
+        .unwrap()
         .to_string();
     assert!(err.contains("terminal_velocity.solid_operator"), "{err}");
     // And the refusal is needed: run anyway (bypassing validation) and the grain/interior-fluid mode blows up,
     // as the growth factor −(1 + 2 M_int/m) predicts (here M_int/m ≈ 0.35: ×1.7 per step).
-    let mut s = scene("terminal_velocity.toml");
-    let t = s.terminal_velocity.as_mut().unwrap();
-    t.solid_operator = SolidOperatorChoice::MovingWall;
+    let mut s = scene::<TerminalVelocity>("terminal_velocity.toml");
+    let t = &mut s.terminal_velocity;
+    t.solid_operator = SolidOperator::MovingWallBounceBack;
     t.duration = 0.605 / 5000.0 * 500.0;
-    assert!(run_terminal_velocity(&s).is_err());
+    let bypass = Case::<TerminalVelocity> {
+        setup: UnitsSetup::new(&s.fluid).unwrap(),
+        scene: s,
+    };
+    assert!(terminal_velocity::simulate(&bypass).is_err());
     assert!(omega3_free_grain_growth(0.35, 1.0).abs() > 1.0);
 }
 
@@ -121,7 +139,8 @@ fn gauss_newton_recovers_a_known_diffusivity() {
 
 #[test]
 fn pressure_diffusion_matches_darcy_permeability_over_storage() {
-    let o = run_pressure_diffusion(&scene("pressure_diffusion.toml")).unwrap();
+    let o = pressure_diffusion::simulate(&case::<PressureDiffusion>("pressure_diffusion.toml"))
+        .unwrap();
     // Storage porosity from the released mass lies between the geometric porosity 1 − ⟨ε⟩ (the PSM nodes with
     // 0 < ε < 1 store fully, not as 1 − ε) and 1 (fluid on links between two fully covered nodes never drains).
     assert!(
@@ -163,7 +182,10 @@ fn pressure_diffusion_matches_darcy_permeability_over_storage() {
 
 #[test]
 fn a_piston_compresses_the_lattice_fluid_with_compressibility_one_over_rho_cs2() {
-    let o = lbdem::poro::run_compressibility(&scene("fluid_compressibility.toml")).unwrap();
+    let o = fluid_compressibility::simulate(&case::<FluidCompressibility>(
+        "fluid_compressibility.toml",
+    ))
+    .unwrap();
     // The piston moved by one spacing (the sin² profile integrates to the travel up to rounding of the steps).
     assert!((o.travel - 1.0).abs() < 1e-2, "travel {}", o.travel);
     // (ΔV/V)/Δp against 1/(ρ₀ c_s²): measured +1.8 %. Tolerance 5 %: the partially covered face nodes store
@@ -186,12 +208,12 @@ fn a_piston_compresses_the_lattice_fluid_with_compressibility_one_over_rho_cs2()
 }
 
 fn consolidation_peak(stiffness_factor: f64, timestep_factor: f64) -> (f64, f64, f64) {
-    let mut s = scene("consolidation.toml");
+    let mut s = scene::<Consolidation>("consolidation.toml");
     s.fluid.timestep = s.fluid.timestep.map(|dt| dt * timestep_factor);
-    let c = s.consolidation.as_mut().unwrap();
+    let c = &mut s.consolidation;
     c.normal_stiffness *= stiffness_factor;
     c.duration = 0.35; // s: every peak below comes before 0.25 s
-    let o = lbdem::poro::run_consolidation(&s).unwrap();
+    let o = consolidation::simulate(&Case::<Consolidation>::new(s).unwrap()).unwrap();
     (o.peak_time, o.peak_pressure, o.final_pressure)
 }
 

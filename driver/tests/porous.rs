@@ -7,10 +7,9 @@
 //! full-resolution variants (c = 0.2…0.6 at l = 20/40/80, Re up to ~100, 200-disc slabs) are printed by
 //! `cargo run --release -p lbdem --example porous_validation -- --full`; the default example run prints the
 //! table of exactly the cases asserted here.
-use lbdem::porous::{
-    darcy_fit, fitted_kozeny_constant, solve_array, solve_porous, ArrayCase, PorousCase,
-    SolidOperatorChoice,
-};
+use lbdem::kinds::cylinder_array::{solve_array, ArrayCase};
+use lbdem::kinds::porous_flow::{darcy_fit, fitted_kozeny_constant, solve_porous, PorousCase};
+use lbdem_kernels::fluid::collide::SolidOperator;
 
 /// The fast porous-slab case used below: `columns` × `rows` discs of diameter `d` at pitch `pitch`, τ = 0.8,
 /// Ω₁, periodic north/south, half a pitch of free fluid before and after the array.
@@ -25,7 +24,7 @@ fn slab(columns: usize, rows: usize, pitch: usize, d: f64, density_drop: f64) ->
         seed: 1,
         walls: false,
         tau: 0.8,
-        solid_operator: SolidOperatorChoice::BounceBack,
+        solid_operator: SolidOperator::NonEquilibriumBounceBack,
         density_drop,
         steady_tolerance: 1e-8,
         check_interval: 100,
@@ -109,7 +108,7 @@ fn moving_wall_operator_drag_matches_sangani_acrivos() {
     for c in [0.2, 0.4] {
         for l in [20usize, 40] {
             let mut case = ArrayCase::stokes(l, c, 0.8);
-            case.solid_operator = SolidOperatorChoice::MovingWall;
+            case.solid_operator = SolidOperator::MovingWallBounceBack;
             let r = solve_array::<f64>(&case).expect("healthy run");
             assert!(r.steady, "c = {c}, l = {l}: not steady");
             let err = r.drag_error.expect("tabulated c");
@@ -141,7 +140,7 @@ fn linearized_operator_drag_matches_sangani_acrivos_like_omega_1() {
     for c in [0.2, 0.4] {
         for l in [20usize, 40] {
             let mut case = ArrayCase::stokes(l, c, 0.8);
-            case.solid_operator = SolidOperatorChoice::Linearized;
+            case.solid_operator = SolidOperator::LinearizedNonEquilibriumBounceBack;
             let r = solve_array::<f64>(&case).expect("healthy run");
             let reference = solve_array::<f64>(&ArrayCase::stokes(l, c, 0.8)).expect("healthy run");
             assert!(r.steady, "c = {c}, l = {l}: not steady");

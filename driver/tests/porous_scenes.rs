@@ -2,8 +2,7 @@
 //! their outputs; bad `[cylinder_array]` / `[porous]` sections are refused with the field named.
 use std::path::{Path, PathBuf};
 
-use lbdem::run::{check, run, RunOptions};
-use lbdem::scene::Scene;
+use lbdem::app::{check, check_text, run, RunOptions};
 
 fn scene_path(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -23,11 +22,15 @@ fn run_bundled(name: &str) -> (serde_json::Value, PathBuf) {
         &RunOptions {
             overwrite: true,
             quiet: true,
+            ..Default::default()
         },
     )
     .expect("bundled scene runs");
     assert!(out.join("summary.json").exists());
-    assert_eq!(summary["all_steady"], true, "{name}: not all cases steady");
+    assert_eq!(
+        summary["results"]["all_steady"], true,
+        "{name}: not all cases steady"
+    );
     (summary, out)
 }
 
@@ -35,7 +38,7 @@ fn run_bundled(name: &str) -> (serde_json::Value, PathBuf) {
 fn bundled_cylinder_array_scenes_run() {
     let (summary, out) = run_bundled("cylinder_array.toml");
     assert!(out.join("drag.csv").exists());
-    let results = summary["results"].as_array().unwrap();
+    let results = summary["results"]["cases"].as_array().unwrap();
     assert_eq!(results.len(), 5);
     // The drag rises steeply with the solid fraction (S&A: 51.5 → 1763 from c = 0.2 to 0.6).
     let drags: Vec<f64> = results
@@ -49,7 +52,7 @@ fn bundled_cylinder_array_scenes_run() {
         assert!(e.abs() < 0.06, "{e}");
     }
     let (summary, _) = run_bundled("cylinder_array_reynolds.toml");
-    let p: Vec<f64> = summary["results"]
+    let p: Vec<f64> = summary["results"]["cases"]
         .as_array()
         .unwrap()
         .iter()
@@ -62,19 +65,20 @@ fn bundled_cylinder_array_scenes_run() {
 fn bundled_porous_scenes_run() {
     let (summary, out) = run_bundled("porous_darcy.toml");
     assert!(out.join("runs.csv").exists());
-    let fit = &summary["darcy_fits"][0];
+    let fit = &summary["results"]["darcy_fits"][0];
     // See driver/tests/porous.rs for the R² ≥ 0.999 argument.
     assert!(fit["r_squared"].as_f64().unwrap() >= 0.999, "{fit}");
     assert!(fit["intercept_relative"].as_f64().unwrap().abs() < 0.01);
     let (summary, _) = run_bundled("porous_kozeny.toml");
-    let ck = summary["fitted_kozeny_constant"].as_f64().unwrap();
+    let ck = summary["results"]["fitted_kozeny_constant"]
+        .as_f64()
+        .unwrap();
     // Same geometry as the Kozeny test in driver/tests/porous.rs (diameters rounded to 1e-6 cm).
     assert!((8.8..=11.3).contains(&ck), "{ck}");
 }
 
 fn refused(text: &str, field: &str) {
-    let err = Scene::from_toml(text, "test")
-        .and_then(|s| s.validate().map(|_| s))
+    let err = check_text(text, "test")
         .err()
         .unwrap_or_else(|| panic!("scene with bad {field} accepted"));
     let msg = err.to_string();
@@ -121,5 +125,5 @@ fn bad_sections_are_refused_with_the_field_named() {
     );
     // A valid section passes.
     let good = p(&format!("columns = 4\n{ok}"));
-    Scene::from_toml(&good, "test").unwrap().validate().unwrap();
+    check_text(&good, "test").unwrap();
 }

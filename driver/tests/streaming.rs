@@ -2,7 +2,7 @@
 //! solids after every step, on every kind of node: periodic seams, walls, Zou–He pressure and velocity sides and
 //! their corners, obstacle nodes, and nodes covered by moving solids. The AA buffer holds the values at other
 //! places after odd steps; `populations()` gathers them back, and that too is compared.
-use lbdem::lattice::{FluidDisc, FluidLattice, Streaming};
+use lbdem::engine::lattice::{FluidDisc, FluidLattice, Streaming};
 use lbdem_kernels::fluid::boundary::{Boundaries, SideCondition};
 use lbdem_kernels::fluid::collide::{SolidOperator, Weighting};
 use lbdem_kernels::fluid::step::FluidParams;

@@ -142,7 +142,7 @@ fn study_refuses_an_output_path_that_is_a_file() {
 
 #[test]
 fn channel_scenes_of_the_study_hold_the_lattice_speed_and_geometry() {
-    use lbdem::channel::ChannelSetup;
+    use lbdem::kinds::channel::ChannelSetup;
     use lbdem::scene::Precision;
     use lbdem::study::{channel_scene, Problem, CHANNEL_LATTICE_SPEED};
     for problem in [Problem::PoiseuillePressure, Problem::PoiseuilleBodyForce] {

@@ -1,9 +1,9 @@
 //! The two-relaxation-time (TRT) fluid through `FluidLattice` (issue 11 item 1): the same bitwise guarantees as
 //! BGK (every SIMD level of the bulk pass, both streaming schemes, any thread count and band height, f32 and
 //! f64), a checkpoint keeps the operator, and bad magic parameters are refused with the field named.
-use lbdem::checkpoint::Checkpoint;
-use lbdem::exec::SimdLevel;
-use lbdem::lattice::{FluidDisc, FluidLattice, Streaming};
+use lbdem::engine::exec::SimdLevel;
+use lbdem::engine::lattice::{FluidDisc, FluidLattice, Streaming};
+use lbdem::run::checkpoint::Checkpoint;
 use lbdem_kernels::fluid::boundary::{Boundaries, SideCondition};
 use lbdem_kernels::fluid::collide::{Collision, SolidOperator, Trt, Weighting};
 use lbdem_kernels::fluid::step::FluidParams;

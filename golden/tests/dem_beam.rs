@@ -1,5 +1,5 @@
 //! Golden snapshot of a small bonded beam (dissertation ch. 6.6 point bonds, eq. 6.13, table 6.1 values) in
-//! three-point bending, run through `lbdem::solid::DemWorld`: 12 × 3 discs (radius 0.1 cm, 2.65 g/cm³) on a
+//! three-point bending, run through `lbdem::engine::dem::DemWorld`: 12 × 3 discs (radius 0.1 cm, 2.65 g/cm³) on a
 //! triangular lattice, every touching pair bonded (k_b = 1e5 dyne/cm, F_crit = 700 dyne), contacts
 //! k_n = 1e5, k_s = 6e5 dyne/cm, frictionless; the two bottom corner discs are held (`DemWorld::held`) and
 //! the middle disc of the top row carries 200 dyne downwards; 10 000 steps of 5e-5 s with local damping 0.7
@@ -9,7 +9,7 @@
 //! differences), and a ringing or frictional (path-dependent) state amplifies those to the 4th digit
 //! (measured). So the snapshot is taken at rest and without friction, where the state is the unique elastic
 //! equilibrium. A changed snapshot is reviewed, never blindly accepted.
-use lbdem::solid::{hexagonal_packing, BondSpec, DemWorld};
+use lbdem::engine::dem::{hexagonal_packing, BondSpec, DemWorld};
 use lbdem_kernels::dem::assembly::ContactModel;
 
 fn sig6(v: f64) -> String {

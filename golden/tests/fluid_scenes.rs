@@ -3,7 +3,7 @@
 //! reproducible across platforms and thread counts; 9 digits keep the snapshots readable while any change to
 //! a kernel's arithmetic beyond roundoff-level reordering shows up. A changed snapshot is reviewed, never
 //! blindly accepted (CI runs insta with CI=true, which fails on a changed or missing snapshot).
-use lbdem::lattice::{FluidDisc, FluidLattice};
+use lbdem::engine::lattice::{FluidDisc, FluidLattice};
 use lbdem_kernels::fluid::boundary::{Boundaries, SideCondition};
 use lbdem_kernels::fluid::collide::Weighting;
 use lbdem_kernels::fluid::step::FluidParams;

@@ -4,7 +4,7 @@
 //! * Plane Poiseuille flow between walls at y = 0 and y = H driven by a pressure gradient (or body-force
 //!   density) G = −dp/dx: u(y) = G/(2μ) · y (H − y), flux Q = G H³/(12 μ), mean velocity ū = G H²/(12 μ),
 //!   maximum u(H/2) = G H²/(8 μ).
-//! * The half-way bounce-back slip of the BGK lattice Boltzmann solution (`REFERENCE.md` §4.1; He, Zou, Luo &
+//! * The half-way bounce-back slip of the BGK lattice Boltzmann solution (He, Zou, Luo &
 //!   Dembo 1997; Ginzburg & d'Humières 2003): with body force per unit mass g, kinematic viscosity
 //!   ν = (τ − ½)/3 and Λ = (τ − ½)², the D2Q9 solution on a channel of N nodes (H = N, walls half a spacing
 //!   outside the edge nodes) is **exactly** u_LB(y) = g/(2ν) · y (H − y) + u_slip with
@@ -12,6 +12,8 @@
 //! * Plane Couette flow between a wall at rest (y = 0) and a wall sliding at U (y = H): u(y) = U y/H.
 //! * Stokes' first problem (Stokes 1851; e.g. Batchelor 1967, §4.3): a plane wall started impulsively at
 //!   speed U under a fluid at rest drags it as u(d, t) = U erfc(d/(2√(νt))), d the distance from the wall.
+//! * Published figures: Sangani & Acrivos's drag of square cylinder arrays; Kozeny–Carman for discs.
+//! * Diffusion: the slab drained at both faces (pressure diffusion, eq. 5.12) and Terzaghi's consolidation.
 
 /// Poiseuille velocity u(y) = G/(2μ) · y (H − y) at distance `y` from the wall of a channel of width `h`,
 /// driven by the pressure gradient (or body-force density) `g` = −dp/dx, dynamic viscosity `mu`.
@@ -110,10 +112,150 @@ mod tests {
         let tau = 0.5 + (3.0f64 / 16.0).sqrt();
         let nu = lattice_viscosity(tau);
         assert!(bounce_back_slip(1e-6, nu, bgk_lambda(tau)).abs() < 1e-20);
-        // REFERENCE.md §4.1: relative centreline error (16Λ − 3)/(3H²); τ = 0.875, H = 8 gives −0.39 %.
+        // The slip formula: relative centreline error (16Λ − 3)/(3H²); τ = 0.875, H = 8 gives −0.39 %.
         let (g, tau, h) = (1e-6, 0.875, 8.0);
         let nu = lattice_viscosity(tau);
         let err = bounce_back_slip(g, nu, bgk_lambda(tau)) / poiseuille_max_velocity(g, nu, h);
         assert!((err - (-0.25 / 64.0)).abs() < 1e-12);
+    }
+}
+
+/// Sangani & Acrivos (1982, Int. J. Multiphase Flow 8, 193–206), table 1, square array of cylinders in Stokes
+/// flow: (solid fraction c, dimensionless drag F/(μU)) with U the superficial velocity and F the drag per
+/// cylinder (per unit length) balancing the mean pressure gradient over the cell, F = G l².
+pub const SANGANI_ACRIVOS_SQUARE: [(f64, f64); 9] = [
+    (0.05, 15.56),
+    (0.10, 24.83),
+    (0.20, 51.53),
+    (0.30, 102.90),
+    (0.40, 217.89),
+    (0.50, 532.55),
+    (0.60, 1.763e3),
+    (0.70, 1.352e4),
+    (0.75, 1.263e5),
+];
+
+/// Sangani & Acrivos's drag F/(μU) of the square array at solid fraction `c`: the table value at a tabulated
+/// c, log-linear interpolation between them (an estimate only, e.g. to size a drive), `None` outside
+/// 0.05 ≤ c ≤ 0.75.
+pub fn sangani_acrivos_drag(c: f64) -> Option<f64> {
+    let t = &SANGANI_ACRIVOS_SQUARE;
+    for w in t.windows(2) {
+        let ((c0, f0), (c1, f1)) = (w[0], w[1]);
+        if (c - c0).abs() < 1e-12 {
+            return Some(f0);
+        }
+        if c > c0 && c < c1 {
+            let s = (c - c0) / (c1 - c0);
+            return Some((f0.ln() + s * (f1.ln() - f0.ln())).exp());
+        }
+    }
+    let (cl, fl) = t[t.len() - 1];
+    ((c - cl).abs() < 1e-12).then_some(fl)
+}
+
+/// Sangani & Acrivos's tabulated drag at exactly a tabulated solid fraction (within 1e-9), else `None`.
+pub fn sangani_acrivos_tabulated(c: f64) -> Option<f64> {
+    SANGANI_ACRIVOS_SQUARE
+        .iter()
+        .find(|(cs, _)| (cs - c).abs() < 1e-9)
+        .map(|(_, f)| *f)
+}
+
+/// Kozeny–Carman permeability of a bed of discs (2-D) of diameter `diameter` at porosity `porosity` with Kozeny
+/// constant `c_k`: k = n³D²/(16 c_K (1 − n)²) (the dissertation's eq. 5.8 with its two slips corrected: the
+/// specific surface of discs is 4(1 − n)/D).
+pub fn kozeny_carman(porosity: f64, diameter: f64, c_k: f64) -> f64 {
+    let n = porosity;
+    n.powi(3) * diameter * diameter / (16.0 * c_k * (1.0 - n).powi(2))
+}
+
+/// The Kozeny constant implied by a permeability: [`kozeny_carman`] solved for c_K.
+pub fn kozeny_constant(porosity: f64, diameter: f64, permeability: f64) -> f64 {
+    let n = porosity;
+    n.powi(3) * diameter * diameter / (16.0 * permeability * (1.0 - n).powi(2))
+}
+
+/// Pressure diffusion in a slab −L ≤ x ≤ L from a uniform initial overpressure P₀, both faces held at 0
+/// (Carslaw & Jaeger 1959, §3.3; the dissertation's eq. 5.12): P/P₀ = Σ_m (4/π) (−1)^m/(2m+1)
+/// cos((2m+1)πx/(2L)) exp(−(2m+1)²π² c t/(4L²)). Returns (P/P₀, ∂(P/P₀)/∂c).
+pub fn slab_pressure(x: f64, t: f64, c: f64, half_length: f64) -> (f64, f64) {
+    let pi = std::f64::consts::PI;
+    let mut p = 0.0;
+    let mut dp = 0.0;
+    for m in 0..10_000 {
+        let k = (2 * m + 1) as f64;
+        let lam = k * k * pi * pi / (4.0 * half_length * half_length);
+        let e = (-lam * c * t).exp();
+        let sign = if m % 2 == 0 { 1.0 } else { -1.0 };
+        let a = 4.0 / pi * sign / k * (k * pi * x / (2.0 * half_length)).cos();
+        p += a * e;
+        dp += -a * lam * t * e;
+        if lam * c * t > 50.0 {
+            break;
+        }
+    }
+    (p, dp)
+}
+
+/// Mean of P/P₀ over the slab of [`slab_pressure`]: Σ_m 8/((2m+1)²π²) exp(−(2m+1)²π² c t/(4L²)).
+pub fn slab_mean_pressure(t: f64, c: f64, half_length: f64) -> f64 {
+    let pi = std::f64::consts::PI;
+    let mut s = 0.0;
+    for m in 0..10_000 {
+        let k = (2 * m + 1) as f64;
+        let arg = k * k * pi * pi * c * t / (4.0 * half_length * half_length);
+        s += 8.0 / (k * k * pi * pi) * (-arg).exp();
+        if arg > 50.0 {
+            break;
+        }
+    }
+    s
+}
+
+/// Terzaghi's one-dimensional consolidation (Terzaghi 1943; Verruijt, *Soil Mechanics*, ch. 15): the excess
+/// pore pressure of a layer of thickness H, drained at its top (depth 0) and impervious at its base (depth H),
+/// after a step load that raises it to p₀ everywhere, as p/p₀ at `depth_below_drain` and time `t` for the
+/// consolidation coefficient `c_v`. By symmetry the layer is half of the slab −H ≤ x ≤ H drained at both faces,
+/// with x = H − depth: [`slab_pressure`].
+pub fn terzaghi_pressure(depth_below_drain: f64, t: f64, c_v: f64, thickness: f64) -> f64 {
+    slab_pressure(thickness - depth_below_drain, t, c_v, thickness).0
+}
+
+#[cfg(test)]
+mod published {
+    use super::*;
+
+    #[test]
+    fn sangani_acrivos_lookup_and_interpolation() {
+        assert_eq!(sangani_acrivos_drag(0.5), Some(532.55));
+        let f = sangani_acrivos_drag(0.45).unwrap();
+        assert!(f > 217.89 && f < 532.55);
+        assert_eq!(sangani_acrivos_drag(0.8), None);
+    }
+
+    #[test]
+    fn kozeny_constant_inverts_kozeny_carman() {
+        let k = kozeny_carman(0.6, 10.0, 9.4);
+        assert!((kozeny_constant(0.6, 10.0, k) - 9.4).abs() < 1e-12);
+        // c_K = 5 gives n³D²/(80(1 − n)²): 6.25e-3 D² at n = 0.5.
+        assert!((kozeny_carman(0.5, 1.0, 5.0) - 6.25e-3).abs() < 1e-15);
+    }
+
+    #[test]
+    fn slab_series_starts_at_one_and_drains_to_zero() {
+        // Inside the slab at t → 0 the series sums to 1 (Fourier series of the constant); the faces are at 0.
+        let (p, _) = slab_pressure(0.3, 1e-6, 1.0, 1.0);
+        assert!((p - 1.0).abs() < 1e-3, "{p}");
+        assert!(slab_pressure(1.0, 0.1, 1.0, 1.0).0.abs() < 1e-12);
+        assert!((slab_mean_pressure(1e-8, 1.0, 1.0) - 1.0).abs() < 1e-3);
+        // Late times: one mode, 8/π² exp(−π² c t/(4L²)).
+        let t = 2.0;
+        let one =
+            8.0 / std::f64::consts::PI.powi(2) * (-std::f64::consts::PI.powi(2) * t / 4.0).exp();
+        assert!((slab_mean_pressure(t, 1.0, 1.0) - one).abs() < 1e-12 * one.max(1e-300) + 1e-15);
+        // Terzaghi: the drained face is at 0, the impervious base (the slab's centre plane) keeps the most.
+        assert!(terzaghi_pressure(0.0, 0.2, 1.0, 1.0).abs() < 1e-12);
+        assert!(terzaghi_pressure(1.0, 0.2, 1.0, 1.0) > terzaghi_pressure(0.5, 0.2, 1.0, 1.0));
     }
 }

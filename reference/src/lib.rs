@@ -4,5 +4,6 @@
 //! than speed (array-of-structs, one node at a time, push streaming), and the analytical or published
 //! solutions the validation tests compare against.
 pub mod analytic;
+pub mod coverage;
 pub mod dem;
 pub mod lbm;

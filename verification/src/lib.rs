@@ -6,7 +6,26 @@
 //! `kani::any()` + `kani::assume` (a proof for every value in the stated ranges); under `cargo test` it is an
 //! odometer ([`for_all`]) that enumerates every combination of the bounded ranges the body asks for, so over
 //! that finite domain the test is itself an exhaustive proof. See `harness` for the bodies.
+//!
+//! Each harness states its bound, what the bounded-exhaustive run enumerates (the whole bounded domain, or a
+//! table of values standing for a domain too large to enumerate, e.g. [`Chooser::float_from`]), and its Kani
+//! side (or why it has none).
 pub mod harness;
+
+/// Number of proptest cases for a property whose usual count is `default`: `default`, unless the environment
+/// variable `LBDEM_PROPTEST_CASES` holds a positive number, which then replaces it for this run (the
+/// mutation-testing command sets it low to keep each mutant cheap; a soak run can set it high). The new
+/// property files use it; proptest's own `PROPTEST_CASES` only reaches configs built from
+/// `ProptestConfig::default()`.
+pub fn proptest_cases(default: u32) -> u32 {
+    match std::env::var("LBDEM_PROPTEST_CASES")
+        .ok()
+        .and_then(|v| v.trim().parse::<u32>().ok())
+    {
+        Some(n) if n > 0 => n,
+        _ => default,
+    }
+}
 
 /// Source of nondeterministic choices for a proof harness body.
 pub trait Chooser {
@@ -15,6 +34,12 @@ pub trait Chooser {
     /// A boolean.
     fn boolean(&mut self) -> bool {
         self.usize_in(0, 1) == 1
+    }
+    /// A float. Under the bounded-exhaustive odometer, each entry of `table` in turn (so the test covers the
+    /// table, not every `f64`); under Kani, any `f64` at all (the table is then only a sample of the domain
+    /// the proof covers).
+    fn float_from(&mut self, table: &[f64]) -> f64 {
+        table[self.usize_in(0, table.len() - 1)]
     }
 }
 
@@ -88,6 +113,9 @@ impl Chooser for KaniChooser {
         let v: usize = kani::any();
         kani::assume(v >= lo && v <= hi);
         v
+    }
+    fn float_from(&mut self, _table: &[f64]) -> f64 {
+        kani::any()
     }
 }
 

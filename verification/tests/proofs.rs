@@ -109,10 +109,12 @@ fn boundary_validation_for_all_interesting_values() {
 
 /// Kani proofs of the same bodies (not run here: Kani cannot be installed on these machines). The layout and
 /// neighbour bodies are loop-free and proved for the same bound (`shape_new_any_size` for every `usize`);
-/// `nodes_in_rows_split` loops over at most `LOOPING_MAX`² nodes and is proved for that smaller bound.
-/// `bulk_rows_band`, `aa_bulk_rows_band` and `fix_passes_in_bounds` have no Kani wrapper: they fill page-padded population
-/// buffers (≥ 9 × 552 elements even for one node), far beyond practical loop unwinding, so their bounded
-/// proof is the exhaustive `for_all` run above.
+/// `nodes_in_rows_split` loops over at most `LOOPING_MAX`² nodes and is proved for that smaller bound;
+/// `boundary_validation` is proved for every `f64` value (the bounded-exhaustive run above enumerates only
+/// the interesting-value table).
+/// `bulk_rows_band`, `aa_bulk_rows_band` and `fix_passes_in_bounds` have no Kani wrapper: they fill page-padded
+/// population buffers (≥ 9 × 552 elements even for one node), far beyond practical loop unwinding, so their
+/// bounded proof is the exhaustive `for_all` run above.
 #[cfg(kani)]
 mod kani_proofs {
     use super::MAX;
@@ -148,5 +150,12 @@ mod kani_proofs {
     #[kani::unwind(18)]
     fn nodes_in_rows_split() {
         fluid::nodes_in_rows_split(&mut KaniChooser, LOOPING_MAX);
+    }
+
+    /// Every side, kind and `f64` value.
+    #[kani::proof]
+    #[kani::unwind(5)]
+    fn boundary_validation() {
+        fluid::boundary_validation(&mut KaniChooser);
     }
 }

@@ -1,6 +1,8 @@
 //! Helpers shared by the driver's integration tests.
 #![allow(dead_code)]
-use lbdem::scene::Scene;
+use lbdem::engine::exec::Exec;
+use lbdem::kinds::channel::{simulate, Channel, ChannelOutcome, ChannelScene};
+use lbdem::run::Case;
 
 /// A channel scene written directly in lattice units (h = 1, Δt = 1, ρ₀ = 1, so ν = (τ − ½)/3 and a pressure
 /// of p is a lattice density change of 3p).
@@ -12,7 +14,7 @@ pub fn lattice_channel(
     strength: f64,
     steps: u64,
     tol: f64,
-) -> Scene {
+) -> ChannelScene {
     let nu = (tau - 0.5) / 3.0;
     let (length, key) = match drive {
         "pressure" => ((nx - 1) as f64, "pressure_drop"),
@@ -39,7 +41,7 @@ steady_tolerance = {tol:e}
 check_interval = 100
 "#
     );
-    Scene::from_toml(&text, "test").expect("test scene parses")
+    ChannelScene::from_toml(&text, "test").expect("test scene parses")
 }
 
 /// Least-squares slope of log(err) against log(n).
@@ -55,4 +57,17 @@ pub fn loglog_slope(points: &[(f64, f64)]) -> f64 {
         den += (n.ln() - mx).powi(2);
     }
     num / den
+}
+
+/// Run a channel scene in memory with the steady tolerance `tol` (`None`: every step) checked every `interval`
+/// steps.
+pub fn run_channel(
+    scene: &ChannelScene,
+    tol: Option<f64>,
+    interval: u64,
+) -> lbdem::error::Result<ChannelOutcome> {
+    let mut scene = scene.clone();
+    scene.run.steady_tolerance = tol;
+    scene.run.check_interval = Some(interval);
+    simulate(&Case::<Channel>::new(scene)?, &Exec::default())
 }

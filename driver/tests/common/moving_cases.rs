@@ -15,16 +15,16 @@
 //!   `CoupledWorld`, with the drive scaled so that Re stays at the scene's ≈ 0.1 at every τ and the run long
 //!   enough for 12 e-foldings of the slowest viscous mode.
 #![allow(dead_code)]
-use lbdem::coupled::{CoupledWorld, LatticeMap};
-use lbdem::lattice::FluidLattice;
-use lbdem::porous::sangani_acrivos_drag;
-use lbdem::solid::DemWorld;
+use lbdem::engine::coupled::{CoupledWorld, LatticeMap};
+use lbdem::engine::dem::DemWorld;
+use lbdem::engine::lattice::FluidLattice;
 use lbdem_kernels::dem::assembly::ContactModel;
 use lbdem_kernels::dem::shape::Particle;
 use lbdem_kernels::fluid::boundary::{Boundaries, SideCondition};
 use lbdem_kernels::fluid::collide::{Collision, SolidOperator, Trt, Weighting};
 use lbdem_kernels::fluid::step::FluidParams;
 use lbdem_reference::analytic;
+use lbdem_reference::analytic::sangani_acrivos_drag;
 
 /// Slab speed (lattice units).
 pub const SLAB_SPEED: f64 = 0.01;
@@ -340,7 +340,7 @@ pub fn free_disc(m: Method, tau: f64, density: f64) -> Outcome {
     // Body force balancing the applied force at the initial coverage.
     let mut probe = lattice(n, n, Boundaries::periodic(), tau, [0.0; 2], m);
     probe.cover_with_discs(
-        &[lbdem::lattice::FluidDisc {
+        &[lbdem::engine::lattice::FluidDisc {
             center,
             radius,
             velocity: [0.0; 2],

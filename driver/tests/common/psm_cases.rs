@@ -7,16 +7,16 @@
 //! periodic box, sized so that the flow is Stokes flow of an incompressible fluid at every τ: Re = U D/ν ≤ 0.01
 //! (inertia changes the drag by O(Re²)) and G l ≤ 1e-5/3 (the density varies by at most ~3 G l ≤ 1e-5 over the
 //! box; at Re = 0.01 alone the drive grows as ν², and at τ = 2 the density of a random pack varied by 3 %, which
-//! moved its permeability by 0.17 %). As in `lbdem::porous::solve_array`, the drag is
+//! moved its permeability by 0.17 %). As in `lbdem::kinds::cylinder_array::solve_array`, the drag is
 //! F/(μU) with F = G l² (S&A's definition) and U the superficial velocity Σ (1 − ε) u_x / l²; μ = ρ_f ν with the
 //! mean fluid density ρ_f. u is what `FluidLattice::moments` reports: the velocity the collision uses (for ΩΛ
 //! the trapezoidal velocity with the solids' friction, see `lbdem_kernels::fluid::collide::psm_velocity`).
 #![allow(dead_code)]
-use lbdem::lattice::{FluidDisc, FluidLattice};
-use lbdem::porous::sangani_acrivos_drag;
+use lbdem::engine::lattice::{FluidDisc, FluidLattice};
 use lbdem_kernels::fluid::boundary::Boundaries;
 use lbdem_kernels::fluid::collide::{Collision, SolidOperator, Trt, Weighting};
 use lbdem_kernels::fluid::step::FluidParams;
+use lbdem_reference::analytic::sangani_acrivos_drag;
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 

@@ -17,6 +17,7 @@ use crate::Real;
 
 /// Material parameters of the particle contacts.
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct ContactModel<T> {
     /// Normal stiffness k_n.
     pub normal_stiffness: T,
@@ -44,7 +45,7 @@ impl<T: Real> ContactModel<T> {
         }
     }
 
-    /// A-priori PFC critical step of an assembly (REFERENCE §7.2) assuming every particle carries
+    /// A-priori PFC critical step of an assembly (Itasca PFC2D manual) assuming every particle carries
     /// `coordination` contacts: per particle √(m/(z k)) for translation with k = max(k_n, k_s), and
     /// √(I/(z k_s R²)) for rotation with R the bounding radius (the largest lever arm); the minimum over the
     /// particles (+∞ for none). Multiply by a safety factor (PFC ≈ 0.8) before use.

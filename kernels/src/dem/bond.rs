@@ -11,7 +11,7 @@
 //! separate shear strength. The break mode recorded is the dominant component of Δx along the bond normal:
 //! tension (opening), compression (closing) or shear (sliding).
 //!
-//! **Parallel bond** (Potyondy & Cundall 2004, IJRMMS 41, 1329–1364; REFERENCE §7.4), 2-D with unit thickness:
+//! **Parallel bond** (Potyondy & Cundall 2004, IJRMMS 41, 1329–1364), 2-D with unit thickness:
 //! R̄ = λ̄ min(R_i, R_j), A = 2R̄, I = 2R̄³/3. The bond sits at the point of the centre line midway across the
 //! gap between the two radii; with ΔU_n = −(v·n)Δt (> 0 approaching), ΔU_s = (v·t)Δt, Δθ = (ω_j − ω_i)Δt:
 //! F̄_n += k̄_n A ΔU_n (compression positive), F̄_s −= k̄_s A ΔU_s, M̄ −= k̄_n I Δθ. The force on j is
@@ -33,6 +33,7 @@ use crate::Real;
 
 /// How a bond failed.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub enum BreakMode {
     /// Tensile failure (opening).
     Tension,
@@ -84,6 +85,7 @@ impl<T: Real> BondForce<T> {
 
 /// The point bond of eq. 6.13.
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct PointBond<T> {
     /// Material point on i, in i's body frame (offset from its centre at zero angle).
     pub anchor_i: [T; 2],
@@ -182,6 +184,7 @@ pub fn point_bond_force<T: Real>(
 
 /// The Potyondy–Cundall parallel bond, 2-D, unit thickness.
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct ParallelBond<T> {
     /// Bond radius R̄ = λ̄ min(R_i, R_j).
     pub radius: T,

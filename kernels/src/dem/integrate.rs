@@ -14,7 +14,7 @@
 //! with the lagged mid-step velocity instead the dashpot's restitution is off by O(ζ ω₀ Δt) (1.5 % for e = 0.5
 //! at Δt = t_c/50, measured).
 //!
-//! **Critical time step** (REFERENCE §7.2): per particle √(m/Σk_n) for translation and √(I/Σk_rot) for
+//! **Critical time step** (the PFC estimate, Itasca PFC2D manual; Cundall & Strack 1979): per particle √(m/Σk_n) for translation and √(I/Σk_rot) for
 //! rotation (Σ over the particle's contacts and bonds; for a disc contact k_rot = k_s r²), the minimum over the
 //! particles; this is the PFC estimate for an assembly, where the highest frequency is about 2√(k/m). The
 //! single-degree-of-freedom bound is 2√(m/k). Practice: a safety factor below 1 (PFC ≈ 0.8), and Δt ≲ t_c/20
@@ -71,7 +71,8 @@ pub fn single_dof_stability_limit<T: Real>(mass: T, stiffness: T) -> T {
 }
 
 /// The stability limit of one degree of freedom with viscous damping ratio ζ: 2(√(1 + ζ²) − ζ)/ω, ω = √(k/m)
-/// (REFERENCE §7.2; ζ = 0 gives [`single_dof_stability_limit`]).
+/// (central difference with a dashpot, e.g. Belytschko et al., *Nonlinear Finite Elements*, §6.3; ζ = 0 gives
+/// [`single_dof_stability_limit`]).
 pub fn damped_stability_limit<T: Real>(mass: T, stiffness: T, damping_ratio: T) -> T {
     let z = damping_ratio;
     T::lit(2.0) * ((T::one() + z * z).sqrt() - z) * (mass / stiffness).sqrt()

@@ -14,14 +14,14 @@
 //! 2-D this *is* the shear force carried with the rotating contact frame. The caller keeps it while the contact
 //! lives and drops it when it ends (the kernel zeroes it for an inactive contact).
 //!
-//! Restitution (REFERENCE §7.1): c_n = 2ζ√(m* k_n), ζ = −ln e/√(π² + ln² e), m* = m_i m_j/(m_i + m_j),
+//! Restitution (Ting & Corkum 1992; Schäfer, Dippel & Wolf 1996, J. Phys. I France 6, 5–20): c_n = 2ζ√(m* k_n), ζ = −ln e/√(π² + ln² e), m* = m_i m_j/(m_i + m_j),
 //! contact duration t_c = π/(ω₀√(1 − ζ²)), ω₀ = √(k_n/m*). The formula assumes the dashpot acts until δ = 0;
 //! with the no-tension clip the restitution comes out higher (measured at Δt = t_c/50: 0.40, 0.55, 0.72, 0.90
 //! for e = 0.3, 0.5, 0.7, 0.9; without the clip within 0.25 % of e, see `verification/tests/dem_validation.rs`).
 //! Feed the dashpot the velocity at the force time ([`BodyState::synchronous`]); the lagged mid-step velocity
 //! of the central-difference scheme costs O(ζω₀Δt) in e.
 //!
-//! PFC local non-viscous damping (REFERENCE §7.3), per degree of freedom: F_d = −α |F_unbal| sign(v), α = 0.7 by
+//! PFC local non-viscous damping (Cundall 1987; Itasca PFC2D manual), per degree of freedom: F_d = −α |F_unbal| sign(v), α = 0.7 by
 //! default in PFC and in the dissertation.
 //!
 //! Units: k_n, k_s force/length; c_n force·time/length; μ dimensionless; consistent otherwise.

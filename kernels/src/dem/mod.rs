@@ -1,4 +1,4 @@
-//! Discrete-element kernels (issue 3): shapes, contact detection, contact and bond laws, integration.
+//! Discrete-element kernels: shapes, contact detection, contact and bond laws, integration.
 //!
 //! The solid half of the coupled model of the dissertation (ch. 2, ch. 4.2.1, ch. 6.6): rigid two-dimensional
 //! particles (discs and ellipses) and straight walls, a soft-contact law (linear spring–dashpot with Coulomb
@@ -14,6 +14,7 @@
 //! * [`bond`]: [`bond::PointBond`] (eq. 6.13) and [`bond::ParallelBond`] (Potyondy & Cundall 2004, 2-D).
 //! * [`integrate`]: central-difference update and critical time-step estimates.
 //! * [`assembly`]: whole-assembly passes (pair contacts, wall contacts, integration) over caller slices.
+//! * [`servo`]: the servo law of stress-controlled walls (platens).
 //!
 //! A typical dry step (the driver owns every buffer):
 //!
@@ -36,5 +37,6 @@ pub mod contact;
 pub mod grid;
 pub mod integrate;
 pub mod law;
+pub mod servo;
 pub mod shape;
 pub mod vector;

@@ -21,6 +21,7 @@ use crate::Real;
 
 /// The shape of a particle, in its body frame.
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub enum Shape<T> {
     /// A disc of the given radius (> 0).
     Disc {
@@ -74,6 +75,7 @@ impl<T: Real> Shape<T> {
 
 /// Plain-data state of one rigid particle.
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct Particle<T> {
     /// Centre of mass.
     pub position: [T; 2],
@@ -219,6 +221,7 @@ impl<T: Real> Placed<T> {
 
 /// A fixed straight wall: the half-plane behind the line through `point` with unit outward normal `normal`.
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct Wall<T> {
     /// A point on the wall surface.
     pub point: [T; 2],

@@ -21,7 +21,7 @@
 //!   diagonal). The corner node reproduces the prescribed density (pressure sides) or velocity exactly; the
 //!   tangential velocity of a pressure side is prescribed as zero.
 //! * Two Zou–He sides meeting: the corner rule of Hecht & Harting (2010) reduced to 2-D (see
-//!   `../shared/REFERENCE.md` §3): the axis and inward-diagonal unknowns by non-equilibrium bounce-back, the two
+//!   Hecht & Harting 2010, J. Stat. Mech. P01018): the axis and inward-diagonal unknowns by non-equilibrium bounce-back, the two
 //!   "buried" diagonals share the mass that remains. The corner density is the prescribed density of a pressure
 //!   side (the mean of both when both are pressure sides); for two velocity sides it is the density of the
 //!   diagonal interior neighbour (extrapolation of order zero). The corner velocity is the prescribed velocity
@@ -33,6 +33,7 @@ use crate::Real;
 
 /// What happens at one side of the lattice.
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub enum SideCondition<T> {
     /// Periodic: the opposite side must be periodic too.
     Periodic,
@@ -139,6 +140,7 @@ impl<T: Real> SideCondition<T> {
 
 /// Conditions on the four sides.
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct Boundaries<T> {
     /// x = 0
     pub west: SideCondition<T>,

@@ -35,6 +35,8 @@ use crate::Real;
 
 /// Which weighting function B(ε, τ) the partially-saturated collision uses.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(rename_all = "snake_case"))]
 pub enum Weighting {
     /// Noble & Torczynski's B(ε, τ) = ε(τ − ½)/((1 − ε) + (τ − ½)) (dissertation eq. 4.5). B(0)=0, B(1)=1.
     #[default]
@@ -49,12 +51,17 @@ pub enum Weighting {
 /// Scene files of this version still use their own words (`bounce_back` is Ω₁ there, `moving_wall` Ω₃,
 /// `linearized` Ω₁ₗ); the kernel's names say what each operator is.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+// The names scene files use (the driver reads this enum directly): "bounce_back" (Ω₁), "superposition" (Ω₂),
+// "moving_wall" (Ω₃), "linearized" (Ω₁ₗ).
 pub enum SolidOperator {
     /// Ω₁, Noble & Torczynski's (1998) non-equilibrium bounce-back (dissertation eq. 4.6):
     /// f_ī − f_ī^eq(ρ, u) + f_i^eq(ρ, u_s) − f_i.
     #[default]
+    #[cfg_attr(feature = "serde", serde(rename = "bounce_back"))]
     NonEquilibriumBounceBack,
     /// Ω₂, the superposition operator of Holdych (2003) (Owen et al. 2011, eq. 29).
+    #[cfg_attr(feature = "serde", serde(rename = "superposition"))]
     Superposition,
     /// Ω₃ (Owen et al. 2011, eq. 33): f_ī − f_ī^eq(ρ, u_s) + f_i^eq(ρ, u_s) − f_i. At B = 1 this is the
     /// classic moving-wall bounce-back, f_i ← f_ī + 6 w_i ρ c_i·u_s: it never touches the rest population, so
@@ -62,18 +69,21 @@ pub enum SolidOperator {
     /// over per unit B is 2ρ(u_s − u), twice Ω₁'s. Not for free grains: at B = 1 it reverses the velocity of
     /// the fluid inside a grain relative to the grain, and with the grain's reaction the coupled mode grows by
     /// 1 + 2 m_fluid/m_grain per step (see the module notes).
+    #[cfg_attr(feature = "serde", serde(rename = "moving_wall"))]
     MovingWallBounceBack,
     /// Ω₁ₗ, Ω₁ with the equilibrium difference linearised: f_ī − f_i + 3 w_i ρ c_i·(u + u_s). It is Ω₁ minus
     /// the part of f_i^eq(ρ, u_s) − f_ī^eq(ρ, u) that is even in c_i (second order in the Mach number), so it
     /// hands over exactly Ω₁'s momentum ρ(u_s − u) per unit B and sets the fluid velocity at a fully covered
     /// node to u_s as Ω₁ does (stable with free grains), but never touches the rest population: fully covered
     /// regions of open systems do not accumulate mass.
+    #[cfg_attr(feature = "serde", serde(rename = "linearized"))]
     LinearizedNonEquilibriumBounceBack,
     /// ΩΛ, the magic-parameter-consistent partially saturated operator (see [`lambda_collide`]): partly covered
     /// nodes are two-relaxation-time fluid with viscosity ν/(1 − B), Λ kept, and a Brinkman friction
     /// 3νκB ρ(u* − u_s) towards the solid; fully covered nodes bounce back, link by link, what arrives from
     /// nodes that are not fully covered (Ladd 1994) and reset the rest to the solid's equilibrium. With TRT its
     /// steady solutions (drag, permeability, wall location) do not depend on τ at fixed Λ.
+    #[cfg_attr(feature = "serde", serde(rename = "lambda_consistent"))]
     LambdaConsistent,
 }
 
@@ -133,6 +143,8 @@ pub fn weighting<T: Real>(kind: Weighting, eps: T, tau: T) -> T {
 /// S_i⁺ = w_i [9 (c_i·u)(c_i·F) − 3 u·F] (the odd and even parts of Guo's w_i [3 (c_i − u) + 9 (c_i·u) c_i]·F),
 /// and u = (Σ f c + F/2)/ρ. S⁺ carries no mass and S⁻ exactly F of momentum, so the step adds F whatever ω^±.
 #[derive(Clone, Copy, Debug, PartialEq, Default)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(rename_all = "snake_case"))]
 pub enum Collision<T> {
     /// Bhatnagar–Gross–Krook, one relaxation time τ (dissertation eq. 4.1).
     #[default]
@@ -142,7 +154,11 @@ pub enum Collision<T> {
 }
 
 /// The magic parameter Λ of a two-relaxation-time collision, checked positive and finite by [`Trt::new`].
+///
+/// Deserialised values are not checked: pass them through [`Collision::rates`] (the driver's `set_collision`
+/// does) before use.
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct Trt<T> {
     magic: T,
 }
@@ -413,6 +429,7 @@ pub fn bgk_collide_slices<T: Real>(planes: [&mut [T]; Q], omega: T, force: [T; 2
 /// One solid covering part of a lattice cell: its solid fraction ε_s of the cell and its rigid-body velocity
 /// u_s = V + ω × (x − X) evaluated at the node.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct SolidShare<T> {
     /// Fraction of the cell area covered by this solid, in [0, 1].
     pub fraction: T,

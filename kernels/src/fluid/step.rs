@@ -489,6 +489,7 @@ pub struct Domain<'a, T> {
 
 /// Collision parameters of the fluid away from moving solids.
 #[derive(Clone, Copy, Debug)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct FluidParams<T> {
     /// Relaxation time τ (> ½); ω = 1/τ.
     pub tau: T,

@@ -1,23 +1,31 @@
-//! DEM broad-phase index-arithmetic harness bodies (`lbdem_kernels::dem::grid`).
+//! DEM broad-phase index-arithmetic harness bodies (`lbdem_kernels::dem::grid`). Each is run exhaustively over
+//! its bounded choices by `tests/dem_proofs.rs` and is a Kani proof under `cfg(kani)` (module `kani_proofs`
+//! below).
 //!
 //! * [`cell_index_in_bounds`]: for every grid up to 6 × 6 and every cell, `cell_index` is < nx·ny and the
-//!   clamped neighbour spans stay inside the grid and contain the cell.
-//! * [`counting_sort_is_a_permutation`]: for every grid up to 3 × 3 and up to 3 particles placed on a table of
-//!   coordinates (inside, on a cell edge, on the far edge, far outside, NaN, ±∞), `build_cell_grid` returns
-//!   offsets that are monotone from 0 to N, a permutation of the particles, each particle inside its own
-//!   cell's range, ascending within a cell; and `candidate_pairs` with an unbounded reach lists exactly the
-//!   pairs i < j in the same or adjacent cells at a finite distance (NaN or infinite separations fail the
-//!   bounding-circle test), each once, sorted.
+//!   clamped neighbour spans stay inside the grid and contain the cell. Bound: nx, ny ≤ 6. The exhaustive run
+//!   covers that whole bounded domain; so does Kani.
+//! * [`counting_sort_is_a_permutation`]: for every grid up to 3 × 3 (cell size 1, origin 0) and up to 3
+//!   particles, `build_cell_grid` returns offsets that are monotone from 0 to N, a permutation of the
+//!   particles, each particle in the cell an independent oracle gives it (the count of cell boundaries at or
+//!   below the coordinate, clamped to the grid; NaN and −∞ in cell 0), ascending within a cell; and
+//!   `candidate_pairs` with an unbounded reach lists exactly the pairs i < j in the same or adjacent oracle
+//!   cells at a finite distance (NaN or infinite separations fail the bounding-circle test), each once,
+//!   sorted. Bound: nx, ny ≤ 3, N ≤ 3. The exhaustive run does **not** cover every coordinate: it enumerates
+//!   the table [`COORDINATES`] (inside, on a cell edge, on the far edge, far outside, NaN, ±∞) for each
+//!   coordinate; under Kani every coordinate is any `f64` ([`Chooser::float_from`]).
 //! * [`history_merge_is_exact`]: for every pair of subsets of a 5-pair universe (as sorted lists),
 //!   `carry_contact_history` gives each persisting pair its old value, every new pair zero, and counts the
-//!   carried pairs; it refuses short value buffers instead of indexing out of bounds.
+//!   carried pairs; it refuses short value buffers instead of indexing out of bounds. Bound: lists drawn from
+//!   the 5-pair universe. The exhaustive run covers that whole bounded domain (all 32 × 32 subset pairs, full
+//!   and short buffers); so does Kani.
 use crate::Chooser;
 use lbdem_kernels::dem::grid::{
     build_cell_grid, candidate_pairs, carry_contact_history, cell_index, neighbour_span, CellGrid,
     GridError, PairCount,
 };
 
-/// Coordinates a particle can take in the sort harness (cell size 1, origin 0).
+/// Coordinates a particle takes in the bounded-exhaustive run of the sort harness (cell size 1, origin 0).
 pub const COORDINATES: [f64; 8] = [
     -1.0,
     0.0,
@@ -43,6 +51,12 @@ pub fn cell_index_in_bounds(c: &mut dyn Chooser) {
     assert!(cell_index(nx, xh, yh) < nx * ny);
 }
 
+/// The oracle cell of coordinate `x` along an axis of `n` unit cells from origin 0, written without `floor`:
+/// the number of interior cell boundaries 1, 2, …, n − 1 at or below x (NaN and −∞ are below every boundary).
+pub fn expected_cell(x: f64, n: usize) -> usize {
+    (1..n).filter(|&b| b as f64 <= x).count()
+}
+
 /// Body: the counting sort and pair listing over small grids (see the module documentation).
 pub fn counting_sort_is_a_permutation(c: &mut dyn Chooser) {
     const MAX_N: usize = 3;
@@ -51,11 +65,12 @@ pub fn counting_sort_is_a_permutation(c: &mut dyn Chooser) {
     let n = c.usize_in(0, MAX_N);
     let mut positions = [[0.0f64; 2]; MAX_N];
     for p in positions.iter_mut().take(n) {
-        p[0] = COORDINATES[c.usize_in(0, COORDINATES.len() - 1)];
-        p[1] = COORDINATES[c.usize_in(0, COORDINATES.len() - 1)];
+        p[0] = c.float_from(&COORDINATES);
+        p[1] = c.float_from(&COORDINATES);
     }
     let positions = &positions[..n];
     let grid = CellGrid::new([0.0, 0.0], 1.0, nx, ny).expect("valid grid");
+    let oracle = |p: [f64; 2]| (expected_cell(p[0], nx), expected_cell(p[1], ny));
     let cells = grid.cell_count();
     let mut start = [0usize; 10];
     let mut order = [usize::MAX; MAX_N];
@@ -72,7 +87,8 @@ pub fn counting_sort_is_a_permutation(c: &mut dyn Chooser) {
         for &i in members {
             assert!(i < n && !seen[i]);
             seen[i] = true;
-            assert_eq!(grid.cell_of(positions[i]), cell);
+            let (ix, iy) = oracle(positions[i]);
+            assert_eq!(cell, ix + nx * iy, "particle {i} in the wrong cell");
         }
     }
     assert!(seen[..n].iter().all(|&s| s));
@@ -86,10 +102,7 @@ pub fn counting_sort_is_a_permutation(c: &mut dyn Chooser) {
     let mut expected = 0;
     for i in 0..n {
         for j in i + 1..n {
-            let (a, b) = (
-                grid.cell_coords(positions[i]),
-                grid.cell_coords(positions[j]),
-            );
+            let (a, b) = (oracle(positions[i]), oracle(positions[j]));
             let d = [
                 positions[j][0] - positions[i][0],
                 positions[j][1] - positions[i][1],

@@ -7,6 +7,11 @@
 //! running the kernels with overflow checks on (the test profile, and Kani's own checks): any overflow panics
 //! and fails the run. Under `for_all` each body is enumerated exhaustively over its bounded choices; under
 //! Kani the same body is a proof over all values in the same ranges.
+//!
+//! Each body's documentation ends with its **bound** (what `max` and the other choices range over), its
+//! **coverage** (whether the bounded-exhaustive run covers that whole bounded domain, or enumerates a table of
+//! values standing for a larger one) and its **Kani** side (the wrapper in `tests/proofs.rs`, or why there is
+//! none).
 use crate::{Chooser, INTERESTING_F64};
 use lbdem_kernels::fluid::aa::{
     local_row, plane_row, post_collision_offset, scatter_row, AaStep, Layout,
@@ -42,6 +47,8 @@ fn choose_shape(c: &mut dyn Chooser, max: usize) -> LatticeShape {
 /// `LatticeShape::new` accepts every nx, ny ∈ 1..=max for both element sizes, refuses empty lattices, and its
 /// padded stride holds a whole plane and puts plane q at q × 320 bytes modulo 4 KiB (distinct for all nine).
 /// Choices: nx, ny, element size. Runs: max² × 2.
+/// Bound: nx, ny ≤ max (12 in the tests), element sizes 4 and 8 (the only two the kernels use).
+/// Coverage: the whole bounded domain. Kani: same bound.
 pub fn shape_layout(c: &mut dyn Chooser, max: usize) {
     let nx = c.usize_in(1, max);
     let ny = c.usize_in(1, max);
@@ -64,6 +71,7 @@ pub fn shape_layout(c: &mut dyn Chooser, max: usize) {
 /// `index`, `coords` and `offset` for every node and direction: index < nodes, coords inverts index, and the
 /// offset lies inside plane q (q·stride ≤ offset < q·stride + nodes ≤ buffer_len).
 /// Choices: nx, ny, element size, x, y, q. Runs: 2 Q (Σ_{n=1..max} n)².
+/// Bound: nx, ny ≤ max. Coverage: the whole bounded domain (every node and direction). Kani: same bound.
 pub fn index_coords_offset(c: &mut dyn Chooser, max: usize) {
     let shape = choose_shape(c, max);
     let x = c.usize_in(0, shape.nx - 1);
@@ -102,6 +110,8 @@ fn expected_axis(
 /// on periodic axes and in bounds, or `Outside` naming exactly the non-periodic sides crossed; `upstream` is
 /// the neighbour along −c_q. Choices: nx, ny, element size, x, y, q, periodic x, periodic y.
 /// Runs: 8 Q (Σ_{n=1..max} n)².
+/// Bound: nx, ny ≤ max. Coverage: the whole bounded domain (every node, direction and periodicity). Kani: same
+/// bound.
 pub fn neighbour_and_upstream(c: &mut dyn Chooser, max: usize) {
     let shape = choose_shape(c, max);
     let x = c.usize_in(0, shape.nx - 1);
@@ -140,6 +150,10 @@ fn tag(q: usize, node: usize) -> f64 {
 /// violation panics), and every stored population is the periodic pull src_q((x, y) − c_q) (checked with a
 /// buffer whose entries name their own plane and node, and an identity collision).
 /// Choices: nx, ny, y0 ∈ 0..=ny, y1 ∈ y0..=ny (f64 only). Runs: max Σ_{n=1..max} (n+1)(n+2)/2.
+/// Bound: nx, ny ≤ max, every band. Coverage: the whole bounded domain of sizes and bands; the populations are
+/// tags and the collision is the identity, so this proves the index arithmetic and the pull, not the collision
+/// (the property tests check that). Kani: none (see `tests/proofs.rs`: page-padded buffers are far beyond
+/// practical unwinding).
 pub fn bulk_rows_band(c: &mut dyn Chooser, max: usize) {
     let nx = c.usize_in(1, max);
     let ny = c.usize_in(1, max);
@@ -182,6 +196,9 @@ pub fn bulk_rows_band(c: &mut dyn Chooser, max: usize) {
 /// P_i(x) = src_i(x − c_i) (one periodic pull) where [`post_collision_offset`] says the streamed layout keeps
 /// it, and the local step after it leaves src_i(x − 2 c_i) (two pulls) in the plain layout.
 /// Choices: nx, ny, ym ∈ 0..=ny (f64 only). Runs: max Σ_{n=1..max} (n + 1).
+/// Bound: nx, ny ≤ max, every split into two bands. Coverage: the whole bounded domain (splits into more bands
+/// are unions of two-band splits row-wise; the pass treats each band independently). Identity collision, as
+/// above. Kani: none (same reason as `bulk_rows_band`).
 pub fn aa_bulk_rows_band(c: &mut dyn Chooser, max: usize) {
     let nx = c.usize_in(1, max);
     let ny = c.usize_in(1, max);
@@ -254,6 +271,9 @@ pub fn aa_bulk_rows_band(c: &mut dyn Chooser, max: usize) {
 /// exactly the listed nodes of rows y0..y1, and the sub-lists of two adjacent bands y0..ym, ym..y1 concatenate
 /// to the sub-list of y0..y1 (band splitting loses and duplicates nothing).
 /// Choices: nx, ny, step ∈ 1..=3, first ∈ 0..step, y0, ym ∈ y0..=ny, y1 ∈ ym..=ny.
+/// Bound: nx, ny ≤ max. Coverage: every band triple, but not every sorted list: the lists are the arithmetic
+/// progressions above (all nodes, every second, every third, from each start), a family standing for sorted
+/// lists. Kani: the same body with nx, ny ≤ 4 (it loops over every node).
 pub fn nodes_in_rows_split(c: &mut dyn Chooser, max: usize) {
     let nx = c.usize_in(1, max);
     let ny = c.usize_in(1, max);
@@ -301,6 +321,8 @@ pub const EDGE_SIZES: [usize; 10] = [
 /// and whose padded buffer length fits `usize` (checked independently in `u128`), with the stride
 /// ⌈n/page⌉·page + pad (page = 4096 B, pad = 320 B, in elements); for accepted sizes the far-corner node's
 /// index, coordinates, last offset and neighbours in every direction are computed in bounds.
+/// Bound: none under Kani (every nx, ny ∈ 1..=usize::MAX). Coverage of the bounded-exhaustive run: the table
+/// [`EDGE_SIZES`] only (every pair of its sizes), standing for the whole range. Kani: every size.
 pub fn shape_new_any_size(c: &mut dyn Chooser, sizes: Option<&[usize]>) {
     let size = |c: &mut dyn Chooser| match sizes {
         Some(table) => table[c.usize_in(0, table.len() - 1)],
@@ -362,8 +384,14 @@ fn axis_conditions(k: usize) -> (SideCondition<f64>, SideCondition<f64>) {
 /// obstacle node anywhere, and every split of the rows into two bands y0..ym, ym..ny:
 /// `classify_special_nodes` lists sorted in-range nodes, and `step_band` + `collide_covered_nodes` (every node
 /// covered) over each band, with that band's `nodes_in_rows` lists, stay in bounds and store finite values.
+/// `classify_special_nodes` is also checked against an independent classification (an obstacle node, a node on
+/// a non-periodic side, or a node with an obstacle upstream along some direction, with wrap on periodic axes).
 /// Choices: nx, ny, x-axis conditions, y-axis conditions, obstacle node (or none), ym.
 /// Runs: 100 Σ_{nx, ny ≤ max} (nx ny + 1)(ny + 1).
+/// Bound: nx, ny ≤ max (6 in the tests), at most one obstacle node, two bands. Coverage: the whole bounded
+/// domain of sizes, side kinds, obstacle positions and splits, but one value per side kind (density 1.01,
+/// velocity (0.02, −0.01)): the values do not enter the index arithmetic. Kani: none (same reason as
+/// `bulk_rows_band`).
 pub fn fix_passes_in_bounds(c: &mut dyn Chooser, max: usize) {
     let nx = c.usize_in(1, max);
     let ny = c.usize_in(1, max);
@@ -390,13 +418,26 @@ pub fn fix_passes_in_bounds(c: &mut dyn Chooser, max: usize) {
     };
     let mut special = vec![u32::MAX; shape.nodes()];
     let count = classify_special_nodes(&shape, &bc, &flags, &mut special);
-    assert!(count <= shape.nodes());
     special.truncate(count);
-    assert!(
-        special.windows(2).all(|w| w[0] < w[1]),
-        "sorted, no repeats"
-    );
-    assert!(special.iter().all(|&n| (n as usize) < shape.nodes()));
+    // The independent classification, in node order (so sorted, no repeats).
+    let periodic = bc.periodic_axes();
+    let expected: Vec<u32> = (0..shape.nodes())
+        .filter(|&n| {
+            let (x, y) = (n % nx, n / nx);
+            let on_side = |v: usize, len: usize, p: bool| !p && (v == 0 || v + 1 == len);
+            let obstacle_upstream = VELOCITIES.iter().any(|v| {
+                let ux = expected_axis(x, -v[0], nx, periodic[0], Side::West, Side::East);
+                let uy = expected_axis(y, -v[1], ny, periodic[1], Side::South, Side::North);
+                matches!((ux, uy), (Ok(a), Ok(b)) if flags[a + nx * b] == SOLID)
+            });
+            flags[n] == SOLID
+                || on_side(x, nx, periodic[0])
+                || on_side(y, ny, periodic[1])
+                || obstacle_upstream
+        })
+        .map(|n| n as u32)
+        .collect();
+    assert_eq!(special, expected, "special nodes");
     let mut src = vec![0.0; shape.buffer_len()];
     let feq = equilibrium(1.0, [0.05, 0.02]);
     for (q, plane) in planes_mut(&shape, &mut src).into_iter().enumerate() {
@@ -469,8 +510,10 @@ pub fn fix_passes_in_bounds(c: &mut dyn Chooser, max: usize) {
 /// components are finite with magnitude below 1. Then periodic pairing: each side periodic or a wall, accepted
 /// exactly when both sides of each axis agree.
 /// Choices: side, kind, value(s) (4 × (10 + 100) runs), then 2⁴ pairing runs: 456 in all.
+/// Bound: one non-wall side. Coverage: the bounded-exhaustive run enumerates the table [`INTERESTING_F64`]
+/// for each value, not every `f64`. Kani: every value is any `f64` ([`Chooser::float_from`]).
 pub fn boundary_validation(c: &mut dyn Chooser) {
-    let v = |c: &mut dyn Chooser| INTERESTING_F64[c.usize_in(0, INTERESTING_F64.len() - 1)];
+    let v = |c: &mut dyn Chooser| c.float_from(&INTERESTING_F64);
     let mut sides = [SideCondition::<f64>::Wall; 4];
     let expected_ok;
     if c.boolean() {

@@ -1,0 +1,28 @@
+//! The solid half orchestrated: a bonded discrete-element sample the driver owns and steps.
+//!
+//! Physics stays in `lbdem_kernels::dem`; this module owns the buffers and calls the kernels in the order of
+//! the kernels' module guide (broad phase → contacts → bonds → platens → integrate), generates packings with
+//! the dissertation's ch. 2 fill-and-expand procedure, runs laboratory loadings, and writes outputs.
+//!
+//! * [`world`]: [`world::DemWorld`] (particles, platens with constant-speed or servo control, bonds and their
+//!   break records, contact history, broad-phase buffers), its deterministic [`world::DemWorld::step`], and the
+//!   critical-step refusal.
+//! * [`packing`]: seeded fill-and-expand packing to an isotropic stress, then bonding (point or parallel bonds);
+//!   a regular hexagonal packing for benchmarks and snapshots.
+//! * [`loading`]: uniaxial and biaxial (servo-confined) compression at a constant platen speed, with the
+//!   stress–strain record, Young's modulus and peak strength; the Brazilian test of a carved bonded disc.
+//! * [`staged`]: the loadings as resumable state machines (one record interval per call).
+//!
+//! Units: the kernels are unit-agnostic; dry scenes are in cgs or SI as declared, with 2-D stresses meaning
+//! force per unit length of a unit-thickness sample.
+pub mod loading;
+pub mod packing;
+pub mod staged;
+pub mod world;
+
+pub use loading::{
+    carve_disc, run_boundary_stress, run_brazilian, run_compression, BoundaryStressTest,
+    BrazilianPoint, BrazilianResult, BrazilianTest, CompressionResult, CompressionTest, CurvePoint,
+};
+pub use packing::{boxed_sample, generate_packing, hexagonal_packing, Packing, PackingSpec};
+pub use world::{Bond, BondLaw, BondSpec, BreakRecord, DemWorld, Platen, PlatenControl, SampleBox};

@@ -1,0 +1,853 @@
+//! [`DemWorld`]: the dry discrete-element assembly the driver owns, and its step.
+//!
+//! One step (dissertation ch. 2 / ch. 6.6 solid half; order of calls as in `lbdem_kernels::dem`):
+//!
+//! 1. broad phase: [`build_cell_grid`] over the particles' bounding box, [`candidate_pairs`] (bounding circles
+//!    within `margin`), [`carry_contact_history`] (shear forces of persisting contacts);
+//! 2. contacts: [`closest_approach`] + [`linear_contact_force`] per pair;
+//! 3. bonds: [`point_bond_force`] (eq. 6.13) or [`parallel_bond_force`] (Potyondy & Cundall 2004) per bond, each
+//!    break recorded as a [`BreakRecord`] (step, position, mode, orientation, load);
+//! 4. platens: [`wall_contact`] + [`linear_contact_force`] with the platen's own velocity (a moving wall);
+//! 5. applied forces on chosen particles (`external_force`), gravity;
+//! 6. [`central_difference_step`] with PFC local damping α (particles marked `held` are not moved);
+//! 7. platens move: constant speed, or the PFC servo v = G (σ_target − σ_measured), G = λ L/(k_n N_c Δt)
+//!    ([`ServoLaw`]).
+//!
+//! Determinism: the per-pair and per-bond forces of steps 2–3 and the integration of step 6 are computed in
+//! parallel with rayon, but every element is computed independently into its own slot, and the sums into the
+//! particle forces run serially in pair, bond, platen order. The result is bitwise identical for any number of
+//! threads (tested).
+//!
+//! Critical step (the PFC estimate: Itasca PFC2D manual; Cundall & Strack 1979): per particle √(m/Σk) for translation and √(I/Σk_rot) for rotation, with
+//! Σk over an assumed coordination of [`ASSUMED_CONTACT_COORDINATION`] contacts (k = max(k_n, k_s),
+//! k_rot = k_s R²) plus the particle's bonds (parallel: max(k̄_n, k̄_s)A, k̄_n I + k̄_s A R²; point: k_b,
+//! k_b R²), and the minimum over particles; the world refuses a step above [`CRITICAL_STEP_SAFETY`] times it.
+//!
+//! Units: any consistent system (the dry scenes use cgs: cm, g, s, dyne; 2-D stresses are force per unit
+//! length of a unit-thickness sample, dyne/cm ≡ dyne/cm² × 1 cm).
+use lbdem_kernels::dem::assembly::ContactModel;
+use lbdem_kernels::dem::bond::{
+    parallel_bond_force, point_bond_force, BondForce, BreakMode, ParallelBond, PointBond,
+};
+use lbdem_kernels::dem::contact::{closest_approach, wall_contact};
+use lbdem_kernels::dem::grid::{build_cell_grid, candidate_pairs, carry_contact_history, CellGrid};
+use lbdem_kernels::dem::integrate::{central_difference_step, particle_critical_time_step};
+use lbdem_kernels::dem::law::{linear_contact_force, BodyState, ContactForce};
+use lbdem_kernels::dem::servo::ServoLaw;
+use lbdem_kernels::dem::shape::{Particle, Wall};
+use lbdem_kernels::Real;
+use rayon::prelude::*;
+
+use serde::{Deserialize, Serialize};
+
+use crate::error::{LbdemError, Result};
+
+/// Contacts per particle assumed by the critical-step estimate (the hexagonal coordination of equal discs).
+pub const ASSUMED_CONTACT_COORDINATION: f64 = 6.0;
+/// Fraction of the critical step the world accepts (PFC's default safety factor).
+pub const CRITICAL_STEP_SAFETY: f64 = 0.8;
+/// Work items per rayon task (below this the parallel passes run on one thread).
+const PARALLEL_CHUNK: usize = 512;
+/// Largest number of broad-phase cells along an axis.
+const MAX_CELLS_PER_AXIS: usize = 4096;
+
+/// A bond and the pair it joins.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Bond<T> {
+    /// Particle indices (i < j).
+    pub pair: [usize; 2],
+    /// Bond law and state.
+    pub law: BondLaw<T>,
+}
+
+/// The two bond laws of the kernels.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub enum BondLaw<T> {
+    /// Point bond of eq. 6.13.
+    Point(PointBond<T>),
+    /// Potyondy–Cundall parallel bond; `radii` place it on the centre line (support values at bonding).
+    Parallel {
+        /// Bond state.
+        bond: ParallelBond<T>,
+        /// Radii of i and j along the bond normal at bonding.
+        radii: [T; 2],
+    },
+}
+
+impl<T: Real> Bond<T> {
+    /// Whether the bond still carries load.
+    pub fn intact(&self) -> bool {
+        match &self.law {
+            BondLaw::Point(b) => b.intact,
+            BondLaw::Parallel { bond, .. } => bond.intact,
+        }
+    }
+
+    /// Translational and rotational stiffness the bond adds to each of its particles (critical step).
+    fn stiffness(&self, lever: T) -> (T, T) {
+        match &self.law {
+            BondLaw::Point(b) => (b.stiffness, b.stiffness * lever * lever),
+            BondLaw::Parallel { bond, .. } => {
+                let a = bond.area();
+                (
+                    bond.normal_stiffness.max(bond.shear_stiffness) * a,
+                    bond.normal_stiffness * bond.inertia()
+                        + bond.shear_stiffness * a * lever * lever,
+                )
+            }
+        }
+    }
+}
+
+/// How bonds are installed between touching particles (chosen by the caller).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub enum BondSpec<T> {
+    /// Point bonds (eq. 6.13): stiffness k_b (force/length), strength F_crit (force).
+    Point {
+        /// k_b.
+        stiffness: T,
+        /// F_crit.
+        strength: T,
+    },
+    /// Parallel bonds (P&C 2004): λ̄, k̄_n, k̄_s (stress/length), σ̄_c, τ̄_c (stress).
+    Parallel {
+        /// Radius multiplier λ̄.
+        radius_multiplier: T,
+        /// k̄_n.
+        normal_stiffness: T,
+        /// k̄_s.
+        shear_stiffness: T,
+        /// σ̄_c.
+        tensile_strength: T,
+        /// τ̄_c.
+        shear_strength: T,
+    },
+}
+
+/// One broken bond.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct BreakRecord<T> {
+    /// Step in which it broke (the world's step counter before the step).
+    pub step: u64,
+    /// The bonded pair.
+    pub pair: [usize; 2],
+    /// Where the bond was.
+    pub position: [T; 2],
+    /// Tension, shear or compression.
+    pub mode: BreakMode,
+    /// Angle of the bond normal (radians from +x).
+    pub orientation: T,
+    /// The load that broke it (force for a point bond, peak stress for a parallel bond).
+    pub load: T,
+}
+
+/// How a platen moves.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub enum PlatenControl<T> {
+    /// Moves at a constant speed along its normal (positive: into the sample). Zero holds it fixed.
+    Speed(T),
+    /// Servo-controlled to hold `target_stress` (compression positive): each step
+    /// v = G (σ_target − σ), G = `relaxation` · L/(k_n N_c Δt) (PFC), |v| ≤ `max_speed`.
+    Servo {
+        /// Stress to hold.
+        target_stress: T,
+        /// Servo relaxation factor λ in (0, 1] (PFC uses ≈ 0.5).
+        relaxation: T,
+        /// Speed limit (length/time).
+        max_speed: T,
+    },
+}
+
+/// A straight rigid wall that may move along its normal.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Platen<T> {
+    /// Position and unit normal (pointing into the sample).
+    pub wall: Wall<T>,
+    /// How it moves.
+    pub control: PlatenControl<T>,
+    /// Loaded length L (stress = normal force / L, unit thickness).
+    pub length: T,
+    /// Whether it interacts with the particles (a removed platen does nothing).
+    pub active: bool,
+    /// Normal speed used in the last step (positive into the sample).
+    pub speed: T,
+    /// Total force the particles exerted on the platen in the last step.
+    pub reaction: [T; 2],
+    /// Active particle contacts in the last step.
+    pub contacts: usize,
+}
+
+impl<T: Real> Platen<T> {
+    /// A platen through `point` with inward normal `normal`, loaded length `length`.
+    pub fn new(point: [T; 2], normal: [T; 2], length: T, control: PlatenControl<T>) -> Self {
+        Platen {
+            wall: Wall { point, normal },
+            control,
+            length,
+            active: true,
+            speed: T::zero(),
+            reaction: [T::zero(); 2],
+            contacts: 0,
+        }
+    }
+
+    /// Normal stress on the platen in the last step (compression positive).
+    pub fn stress(&self) -> T {
+        -(self.reaction[0] * self.wall.normal[0] + self.reaction[1] * self.wall.normal[1])
+            / self.length
+    }
+}
+
+/// The sample box: indices of the four platens in [`DemWorld::platens`] (left, right, bottom, top).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct SampleBox {
+    /// Platen at x = min (normal +x).
+    pub left: usize,
+    /// Platen at x = max (normal −x).
+    pub right: usize,
+    /// Platen at y = min (normal +y).
+    pub bottom: usize,
+    /// Platen at y = max (normal −y).
+    pub top: usize,
+}
+
+/// The dry assembly: particles, platens, bonds, contact history and the broad-phase buffers.
+/// Checkpoints (serde) hold everything a future step reads: particles, platens, the sample box, bonds with their
+/// law state, the break records, contact material, damping, gravity, applied loads, held flags, broad-phase
+/// margin, time step, step counter, the last broad phase's pair list with its shear history, the wall shear
+/// history, and the last step's force and torque sums and contact statistics (read by
+/// [`DemWorld::unbalanced_force_ratio`]). The skipped buffers are scratch, rebuilt by every step.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(bound(serialize = "T: Serialize", deserialize = "T: Deserialize<'de>"))]
+pub struct DemWorld<T> {
+    /// Particles.
+    pub particles: Vec<Particle<T>>,
+    /// Platens (walls).
+    pub platens: Vec<Platen<T>>,
+    /// When set, the platens' loaded lengths follow the box (L_left = L_right = y_top − y_bottom, …).
+    pub sample_box: Option<SampleBox>,
+    /// Bonds in creation order.
+    pub bonds: Vec<Bond<T>>,
+    /// Contact material.
+    pub model: ContactModel<T>,
+    /// PFC local damping α.
+    pub local_damping: T,
+    /// Gravity (acceleration).
+    pub gravity: [T; 2],
+    /// Applied force per particle (e.g. the axial stress through boundary particles).
+    pub external_force: Vec<[T; 2]>,
+    /// Applied torque on each particle (e.g. the fluid torque of the coupling, eq. 4.8), added every step.
+    pub external_torque: Vec<T>,
+    /// Particles held in place (not integrated: zero velocity, fixed position and angle), e.g. supports.
+    pub held: Vec<bool>,
+    /// Every bond break so far, in order.
+    pub breaks: Vec<BreakRecord<T>>,
+    /// Broad-phase skin: pairs whose bounding circles are within it are tested.
+    pub margin: T,
+    dt: T,
+    step: u64,
+    active_contacts: usize,
+    contact_normal_sum: T,
+    #[serde(skip)]
+    radii: Vec<T>,
+    #[serde(skip)]
+    positions: Vec<[T; 2]>,
+    #[serde(skip)]
+    cell_start: Vec<usize>,
+    #[serde(skip)]
+    cell_particles: Vec<usize>,
+    pairs: Vec<[usize; 2]>,
+    shear: Vec<T>,
+    #[serde(skip)]
+    previous_pairs: Vec<[usize; 2]>,
+    #[serde(skip)]
+    previous_shear: Vec<T>,
+    #[serde(skip)]
+    contact_forces: Vec<ContactForce<T>>,
+    #[serde(skip)]
+    bond_forces: Vec<BondForce<T>>,
+    force: Vec<[T; 2]>,
+    torque: Vec<T>,
+    wall_shear: Vec<T>,
+}
+
+fn check_dt<T: Real>(dt: T, critical: T) -> Result<()> {
+    let limit = T::lit(CRITICAL_STEP_SAFETY) * critical;
+    if dt.is_finite() && dt > T::zero() && dt <= limit {
+        return Ok(());
+    }
+    Err(LbdemError::field(
+        "solid.timestep",
+        format!("{:e}", dt.to_f64_exact()),
+        &format!(
+            "exceeds {CRITICAL_STEP_SAFETY} x the DEM critical step {:e} (min over particles of sqrt(m/sum k), sqrt(I/sum k_rot))",
+            critical.to_f64_exact()
+        ),
+        &format!(
+            "use solid.timestep <= {:e}, or soften the contacts/bonds, or make the particles heavier",
+            limit.to_f64_exact()
+        ),
+    ))
+}
+
+impl<T: Real> DemWorld<T> {
+    /// A world with the given particles, contact material and step; refuses a step above the critical one.
+    pub fn new(particles: Vec<Particle<T>>, model: ContactModel<T>, dt: T) -> Result<Self> {
+        let n = particles.len();
+        let mut world = DemWorld {
+            particles,
+            platens: Vec::new(),
+            sample_box: None,
+            bonds: Vec::new(),
+            model,
+            local_damping: T::lit(lbdem_kernels::dem::law::DEFAULT_LOCAL_DAMPING),
+            gravity: [T::zero(); 2],
+            external_force: vec![[T::zero(); 2]; n],
+            external_torque: vec![T::zero(); n],
+            held: vec![false; n],
+            breaks: Vec::new(),
+            margin: T::zero(),
+            dt,
+            step: 0,
+            active_contacts: 0,
+            contact_normal_sum: T::zero(),
+            radii: Vec::new(),
+            positions: Vec::new(),
+            cell_start: Vec::new(),
+            cell_particles: Vec::new(),
+            pairs: Vec::new(),
+            shear: Vec::new(),
+            previous_pairs: Vec::new(),
+            previous_shear: Vec::new(),
+            contact_forces: Vec::new(),
+            bond_forces: Vec::new(),
+            force: Vec::new(),
+            torque: Vec::new(),
+            wall_shear: Vec::new(),
+        };
+        let r_min = world
+            .particles
+            .iter()
+            .map(|p| p.shape.bounding_radius())
+            .fold(T::infinity(), |a, b| a.min(b));
+        world.margin = if r_min.is_finite() {
+            T::lit(0.05) * r_min
+        } else {
+            T::zero()
+        };
+        world.set_timestep(dt)?;
+        Ok(world)
+    }
+
+    /// The time step.
+    pub fn timestep(&self) -> T {
+        self.dt
+    }
+
+    /// Change the time step (refused above [`CRITICAL_STEP_SAFETY`] × the critical step).
+    pub fn set_timestep(&mut self, dt: T) -> Result<()> {
+        check_dt(dt, self.critical_time_step())?;
+        self.dt = dt;
+        Ok(())
+    }
+
+    /// Steps taken.
+    pub fn step_count(&self) -> u64 {
+        self.step
+    }
+
+    /// Active particle–particle contacts in the last step.
+    pub fn active_contacts(&self) -> usize {
+        self.active_contacts
+    }
+
+    /// Candidate pairs of the last broad phase (sorted).
+    pub fn candidate_pair_list(&self) -> &[[usize; 2]] {
+        &self.pairs
+    }
+
+    /// The critical step estimate of the module documentation.
+    pub fn critical_time_step(&self) -> T {
+        let z = T::lit(ASSUMED_CONTACT_COORDINATION);
+        let k = self.model.normal_stiffness.max(self.model.shear_stiffness);
+        let mut kt: Vec<T> = vec![z * k; self.particles.len()];
+        let mut kr: Vec<T> = self
+            .particles
+            .iter()
+            .map(|p| {
+                let r = p.shape.bounding_radius();
+                z * self.model.shear_stiffness * r * r
+            })
+            .collect();
+        for b in self.bonds.iter().filter(|b| b.intact()) {
+            for &i in &b.pair {
+                let (t, r) = b.stiffness(self.particles[i].shape.bounding_radius());
+                kt[i] += t;
+                kr[i] += r;
+            }
+        }
+        self.particles
+            .iter()
+            .zip(kt.iter().zip(&kr))
+            .map(|(p, (&t, &r))| particle_critical_time_step(p.mass, t, p.moment_of_inertia, r))
+            .fold(T::infinity(), |a, b| a.min(b))
+    }
+
+    /// Add a platen; returns its index.
+    pub fn add_platen(&mut self, platen: Platen<T>) -> usize {
+        self.platens.push(platen);
+        self.wall_shear = vec![T::zero(); self.particles.len() * self.platens.len()];
+        self.platens.len() - 1
+    }
+
+    /// Enclose the particles in four platens at x ∈ [x0, x1], y ∈ [y0, y1], all with the same control;
+    /// returns the box (also stored in [`DemWorld::sample_box`]).
+    pub fn add_box(&mut self, lo: [T; 2], hi: [T; 2], control: PlatenControl<T>) -> SampleBox {
+        let (w, h) = (hi[0] - lo[0], hi[1] - lo[1]);
+        let (o, l) = (T::zero(), T::one());
+        let b = SampleBox {
+            left: self.add_platen(Platen::new(lo, [l, o], h, control)),
+            right: self.add_platen(Platen::new(hi, [-l, o], h, control)),
+            bottom: self.add_platen(Platen::new(lo, [o, l], w, control)),
+            top: self.add_platen(Platen::new(hi, [o, -l], w, control)),
+        };
+        self.sample_box = Some(b);
+        b
+    }
+
+    /// Bond every pair whose surfaces are closer than `gap` (overlapping pairs included) and that has no bond
+    /// yet (intact or broken); returns the number of bonds added. Rechecks the time step against the stiffer
+    /// assembly.
+    pub fn bond_touching_pairs(&mut self, spec: BondSpec<T>, gap: T) -> Result<usize> {
+        let saved = self.margin;
+        self.margin = self.margin.max(gap);
+        self.broad_phase();
+        self.margin = saved;
+        let existing: std::collections::HashSet<[usize; 2]> =
+            self.bonds.iter().map(|b| b.pair).collect();
+        let mut added = 0;
+        for &[i, j] in &self.pairs {
+            if existing.contains(&[i, j]) {
+                continue;
+            }
+            let (pi, pj) = (&self.particles[i], &self.particles[j]);
+            let c = closest_approach(pi, pj);
+            if c.overlap <= -gap {
+                continue;
+            }
+            let law = match spec {
+                BondSpec::Point {
+                    stiffness,
+                    strength,
+                } => BondLaw::Point(PointBond::between(pi, pj, stiffness, strength)),
+                BondSpec::Parallel {
+                    radius_multiplier,
+                    normal_stiffness,
+                    shear_stiffness,
+                    tensile_strength,
+                    shear_strength,
+                } => {
+                    let d = [
+                        pj.position[0] - pi.position[0],
+                        pj.position[1] - pi.position[1],
+                    ];
+                    let len = d[0].portable_hypot(d[1]);
+                    let n = if len > T::zero() {
+                        [d[0] / len, d[1] / len]
+                    } else {
+                        [T::one(), T::zero()]
+                    };
+                    let radii = [pi.placed().support_value(n), pj.placed().support_value(n)];
+                    BondLaw::Parallel {
+                        bond: ParallelBond::new(
+                            radii[0],
+                            radii[1],
+                            radius_multiplier,
+                            normal_stiffness,
+                            shear_stiffness,
+                            tensile_strength,
+                            shear_strength,
+                        ),
+                        radii,
+                    }
+                }
+            };
+            self.bonds.push(Bond { pair: [i, j], law });
+            added += 1;
+        }
+        check_dt(self.dt, self.critical_time_step())?;
+        Ok(added)
+    }
+
+    /// Fraction of each particle's bonds that are broken (0 for a particle without bonds).
+    pub fn broken_bond_fraction(&self) -> Vec<f64> {
+        let n = self.particles.len();
+        let mut total = vec![0u32; n];
+        let mut broken = vec![0u32; n];
+        for b in &self.bonds {
+            for &i in &b.pair {
+                total[i] += 1;
+                if !b.intact() {
+                    broken[i] += 1;
+                }
+            }
+        }
+        total
+            .iter()
+            .zip(&broken)
+            .map(|(&t, &b)| if t == 0 { 0.0 } else { b as f64 / t as f64 })
+            .collect()
+    }
+
+    /// Intact bonds.
+    pub fn intact_bonds(&self) -> usize {
+        self.bonds.iter().filter(|b| b.intact()).count()
+    }
+
+    /// Total kinetic energy.
+    pub fn kinetic_energy(&self) -> T {
+        self.particles
+            .iter()
+            .map(lbdem_kernels::dem::integrate::kinetic_energy)
+            .fold(T::zero(), |a, b| a + b)
+    }
+
+    /// Axis-aligned bounding box of the particles (their bounding circles).
+    pub fn bounds(&self) -> ([T; 2], [T; 2]) {
+        let mut lo = [T::infinity(); 2];
+        let mut hi = [T::neg_infinity(); 2];
+        for p in &self.particles {
+            let r = p.shape.bounding_radius();
+            for k in 0..2 {
+                lo[k] = lo[k].min(p.position[k] - r);
+                hi[k] = hi[k].max(p.position[k] + r);
+            }
+        }
+        (lo, hi)
+    }
+
+    fn broad_phase(&mut self) {
+        let n = self.particles.len();
+        self.positions.clear();
+        self.positions
+            .extend(self.particles.iter().map(|p| p.position));
+        self.radii.clear();
+        self.radii
+            .extend(self.particles.iter().map(|p| p.shape.bounding_radius()));
+        std::mem::swap(&mut self.pairs, &mut self.previous_pairs);
+        std::mem::swap(&mut self.shear, &mut self.previous_shear);
+        self.pairs.clear();
+        if n < 2 {
+            self.shear.clear();
+            return;
+        }
+        let r_max = self.radii.iter().fold(T::zero(), |a, &b| a.max(b));
+        let (lo, hi) = self.bounds();
+        let cell = T::lit(2.0) * r_max + self.margin;
+        // Bounds are finite for finite positions; a non-finite grid falls back to one cell (the kernel clamps).
+        let grid = CellGrid::covering(lo, hi, cell, MAX_CELLS_PER_AXIS)
+            .or_else(|_| CellGrid::new([T::zero(); 2], T::one(), 1, 1))
+            .expect("a 1 x 1 grid of unit cells is valid");
+        self.cell_start.resize(grid.cell_start_len(), 0);
+        self.cell_particles.resize(n, 0);
+        build_cell_grid(
+            &grid,
+            &self.positions,
+            &mut self.cell_start,
+            &mut self.cell_particles,
+        )
+        .expect("buffers sized to the grid");
+        loop {
+            let cap = self.pairs.capacity().max(4 * n);
+            self.pairs.resize(cap, [0, 0]);
+            let count = candidate_pairs(
+                &grid,
+                &self.positions,
+                &self.radii,
+                self.margin,
+                &self.cell_start,
+                &self.cell_particles,
+                &mut self.pairs,
+            )
+            .expect("buffers sized to the grid");
+            if count.stored == count.found {
+                self.pairs.truncate(count.found);
+                break;
+            }
+            self.pairs.clear();
+            self.pairs.reserve(count.found);
+        }
+        self.shear.resize(self.pairs.len(), T::zero());
+        carry_contact_history(
+            &self.previous_pairs,
+            &self.previous_shear,
+            &self.pairs,
+            &mut self.shear,
+        )
+        .expect("history buffers sized to their pair lists");
+    }
+
+    /// Advance one step (see the module documentation for the order).
+    pub fn step(&mut self) {
+        let n = self.particles.len();
+        let dt = self.dt;
+        self.broad_phase();
+        self.force.clear();
+        self.force.resize(n, [T::zero(); 2]);
+        self.torque.clear();
+        self.torque.resize(n, T::zero());
+
+        // Contacts: independent per pair (parallel), summed in pair order (serial).
+        let model = self.model;
+        let particles = &self.particles;
+        self.contact_forces
+            .resize(self.pairs.len(), ContactForce::zero());
+        self.pairs
+            .par_iter()
+            .zip(self.shear.par_iter_mut())
+            .zip(self.contact_forces.par_iter_mut())
+            .with_min_len(PARALLEL_CHUNK)
+            .for_each(|((&[i, j], history), out)| {
+                let (pi, pj) = (&particles[i], &particles[j]);
+                let c = closest_approach(pi, pj);
+                let law = model.law(pi.mass, pj.mass);
+                *out = linear_contact_force(
+                    &law,
+                    &c,
+                    &BodyState::synchronous(pi, dt),
+                    &BodyState::synchronous(pj, dt),
+                    history,
+                    dt,
+                );
+            });
+        let mut active = 0;
+        let mut normal_sum = T::zero();
+        for (&[i, j], f) in self.pairs.iter().zip(&self.contact_forces) {
+            if f.normal_force > T::zero() || f.shear_force != T::zero() {
+                active += 1;
+                normal_sum += f.normal_force;
+            }
+            add_to(&mut self.force[i], f.force_on_i);
+            add_to(&mut self.force[j], f.force_on_j);
+            self.torque[i] += f.torque_on_i;
+            self.torque[j] += f.torque_on_j;
+        }
+        self.active_contacts = active;
+        self.contact_normal_sum = normal_sum;
+
+        // Bonds: independent per bond (parallel), summed and recorded in bond order (serial).
+        if !self.bonds.is_empty() {
+            self.bond_forces.resize(
+                self.bonds.len(),
+                BondForce {
+                    force_on_i: [T::zero(); 2],
+                    force_on_j: [T::zero(); 2],
+                    torque_on_i: T::zero(),
+                    torque_on_j: T::zero(),
+                    broke: None,
+                },
+            );
+            self.bonds
+                .par_iter_mut()
+                .zip(self.bond_forces.par_iter_mut())
+                .with_min_len(PARALLEL_CHUNK)
+                .for_each(|(b, out)| {
+                    let [i, j] = b.pair;
+                    let (pi, pj) = (&particles[i], &particles[j]);
+                    *out = match &mut b.law {
+                        BondLaw::Point(bond) => point_bond_force(bond, pi, pj),
+                        BondLaw::Parallel { bond, radii } => parallel_bond_force(
+                            bond,
+                            &BodyState::of(pi),
+                            radii[0],
+                            &BodyState::of(pj),
+                            radii[1],
+                            dt,
+                        ),
+                    };
+                });
+            for (b, f) in self.bonds.iter().zip(&self.bond_forces) {
+                let [i, j] = b.pair;
+                if let Some(br) = f.broke {
+                    self.breaks.push(BreakRecord {
+                        step: self.step,
+                        pair: b.pair,
+                        position: br.position,
+                        mode: br.mode,
+                        orientation: br.orientation,
+                        load: br.load,
+                    });
+                    continue;
+                }
+                add_to(&mut self.force[i], f.force_on_i);
+                add_to(&mut self.force[j], f.force_on_j);
+                self.torque[i] += f.torque_on_i;
+                self.torque[j] += f.torque_on_j;
+            }
+        }
+
+        // Platens: particles in index order, platens in slice order (serial; O(N × platens)).
+        let walls = self.platens.len();
+        if self.wall_shear.len() != n * walls {
+            self.wall_shear = vec![T::zero(); n * walls];
+        }
+        for pl in self.platens.iter_mut() {
+            pl.reaction = [T::zero(); 2];
+            pl.contacts = 0;
+        }
+        for (i, p) in self.particles.iter().enumerate() {
+            for (w, pl) in self.platens.iter_mut().enumerate() {
+                let history = &mut self.wall_shear[i * walls + w];
+                let contact = if pl.active {
+                    wall_contact(p, &pl.wall)
+                } else {
+                    None
+                };
+                let Some(c) = contact else {
+                    *history = T::zero();
+                    continue;
+                };
+                let law = model.law(p.mass, T::infinity());
+                let wall_body = BodyState {
+                    position: c.point_j,
+                    velocity: [pl.wall.normal[0] * pl.speed, pl.wall.normal[1] * pl.speed],
+                    angular_velocity: T::zero(),
+                };
+                let f = linear_contact_force(
+                    &law,
+                    &c,
+                    &BodyState::synchronous(p, dt),
+                    &wall_body,
+                    history,
+                    dt,
+                );
+                add_to(&mut self.force[i], f.force_on_i);
+                self.torque[i] += f.torque_on_i;
+                // Force on the platen = −(force on the particle).
+                pl.reaction[0] -= f.force_on_i[0];
+                pl.reaction[1] -= f.force_on_i[1];
+                pl.contacts += 1;
+            }
+        }
+        for (f, e) in self.force.iter_mut().zip(&self.external_force) {
+            add_to(f, *e);
+        }
+        for (t, e) in self.torque.iter_mut().zip(&self.external_torque) {
+            *t += *e;
+        }
+
+        // Integrate (independent per particle); held particles stay where they are.
+        let (gravity, alpha) = (self.gravity, self.local_damping);
+        if self.held.len() != n {
+            self.held.resize(n, false);
+        }
+        self.particles
+            .par_iter_mut()
+            .zip(self.force.par_iter())
+            .zip(self.torque.par_iter())
+            .zip(self.held.par_iter())
+            .with_min_len(PARALLEL_CHUNK)
+            .for_each(|(((p, f), t), &held)| {
+                if !held {
+                    central_difference_step(p, *f, *t, gravity, alpha, dt)
+                }
+            });
+
+        // Platen motion: servo speeds from this step's stresses, then move.
+        if let Some(b) = self.sample_box {
+            let w = self.platens[b.right].wall.point[0] - self.platens[b.left].wall.point[0];
+            let h = self.platens[b.top].wall.point[1] - self.platens[b.bottom].wall.point[1];
+            self.platens[b.left].length = h;
+            self.platens[b.right].length = h;
+            self.platens[b.bottom].length = w;
+            self.platens[b.top].length = w;
+        }
+        let kn = self.model.normal_stiffness;
+        for pl in self.platens.iter_mut() {
+            pl.speed = match pl.control {
+                PlatenControl::Speed(v) => v,
+                PlatenControl::Servo {
+                    target_stress,
+                    relaxation,
+                    max_speed,
+                } => ServoLaw {
+                    target_stress,
+                    relaxation,
+                    max_speed,
+                }
+                .speed(pl.stress(), pl.length, kn, pl.contacts, dt),
+            };
+            if pl.active {
+                pl.wall.point[0] += pl.wall.normal[0] * pl.speed * dt;
+                pl.wall.point[1] += pl.wall.normal[1] * pl.speed * dt;
+            }
+        }
+        self.step += 1;
+    }
+
+    /// Mean unbalanced force over the mean contact normal force of the last step (PFC's equilibrium ratio):
+    /// (Σ|F_i|/N)/(ΣF_n/N_c); 0 without contacts or particles.
+    pub fn unbalanced_force_ratio(&self) -> T {
+        if self.force.is_empty()
+            || self.active_contacts == 0
+            || self.contact_normal_sum <= T::zero()
+        {
+            return T::zero();
+        }
+        let s = self
+            .force
+            .iter()
+            .fold(T::zero(), |a, f| a + f[0].portable_hypot(f[1]));
+        (s / T::lit(self.force.len() as f64))
+            / (self.contact_normal_sum / T::lit(self.active_contacts as f64))
+    }
+
+    /// Spread a stress `stress` (compression positive) over the particles `indices` as applied forces along
+    /// `direction` (unit), over the loaded length `length`: particle k gets σ L w_k/Σw with w_k its
+    /// bounding diameter. Replaces their previous applied force.
+    pub fn apply_boundary_stress(
+        &mut self,
+        indices: &[usize],
+        direction: [T; 2],
+        stress: T,
+        length: T,
+    ) {
+        let total: T = indices
+            .iter()
+            .map(|&i| self.particles[i].shape.bounding_radius())
+            .fold(T::zero(), |a, b| a + b);
+        if total <= T::zero() {
+            return;
+        }
+        for &i in indices {
+            let share = stress * length * self.particles[i].shape.bounding_radius() / total;
+            self.external_force[i] = [direction[0] * share, direction[1] * share];
+        }
+    }
+
+    /// Indices of the particles whose bounding circle reaches within `depth` of the given side of the
+    /// particles' bounding box (side: 0 = left, 1 = right, 2 = bottom, 3 = top), ascending.
+    pub fn boundary_particles(&self, side: usize, depth: T) -> Vec<usize> {
+        let (lo, hi) = self.bounds();
+        self.particles
+            .iter()
+            .enumerate()
+            .filter(|(_, p)| {
+                let r = p.shape.bounding_radius();
+                match side {
+                    0 => p.position[0] - r <= lo[0] + depth,
+                    1 => p.position[0] + r >= hi[0] - depth,
+                    2 => p.position[1] - r <= lo[1] + depth,
+                    _ => p.position[1] + r >= hi[1] - depth,
+                }
+            })
+            .map(|(i, _)| i)
+            .collect()
+    }
+}
+
+#[inline(always)]
+fn add_to<T: Real>(a: &mut [T; 2], b: [T; 2]) {
+    a[0] += b[0];
+    a[1] += b[1];
+}

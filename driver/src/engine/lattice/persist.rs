@@ -1,0 +1,124 @@
+//! Checkpoints of a [`FluidLattice`] (serde): shape, side conditions, collision parameters, node flags, the
+//! current populations (every plane in full, padding included), the step counter, the PSM coverage (covered
+//! nodes, shares, owners, the momentum exchanged at the last step, the weighting), the solid operator and the
+//! fluid collision (BGK, or TRT with its magic parameter, checked again on load) and the velocity profiles of
+//! profile sides (checked again on load). The special-node list and ΩΛ's open-link masks are derived from the
+//! flags and the coverage and rebuilt. The populations are saved in the two-lattice layout
+//! whatever the streaming scheme and step parity (see [`FluidLattice::populations`]), and a loaded lattice starts
+//! from that layout with the default scheme (a run sets its own afterwards): either continues bitwise as the
+//! saved run would have. The two-lattice scheme's second buffer is scratch (every node of it is rewritten by the
+//! next step before it is read); the band height only changes speed.
+use std::borrow::Cow;
+
+use lbdem_kernels::fluid::boundary::Boundaries;
+use lbdem_kernels::fluid::collide::{Collision, SolidOperator};
+use lbdem_kernels::fluid::step::FluidParams;
+use lbdem_kernels::Real;
+use serde::de::Error as _;
+use serde::{Deserialize, Deserializer, Serialize, Serializer};
+
+use super::{Coverage, FluidLattice};
+
+/// What a checkpoint holds of a lattice.
+#[derive(Serialize, Deserialize)]
+#[serde(bound(serialize = "T: Serialize", deserialize = "T: Deserialize<'de>"))]
+struct Record<'a, T: Real> {
+    nx: usize,
+    ny: usize,
+    bc: Boundaries<T>,
+    params: FluidParams<T>,
+    flags: Cow<'a, [u8]>,
+    populations: Cow<'a, [T]>,
+    steps: u64,
+    solid_operator: SolidOperator,
+    collision: Collision<T>,
+    coverage: Option<Cow<'a, Coverage<T>>>,
+    profiles: Cow<'a, [Vec<[T; 2]>; 4]>,
+}
+
+impl<T: Real + Serialize> Serialize for FluidLattice<T> {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        Record {
+            nx: self.shape.nx,
+            ny: self.shape.ny,
+            bc: self.bc,
+            params: self.params,
+            flags: Cow::Borrowed(&self.flags),
+            populations: self.populations(),
+            steps: self.steps,
+            solid_operator: self.solid_operator,
+            collision: self.collision,
+            coverage: self.coverage.as_ref().map(Cow::Borrowed),
+            profiles: Cow::Borrowed(&self.profiles),
+        }
+        .serialize(s)
+    }
+}
+
+impl<'de, T: Real + Deserialize<'de>> Deserialize<'de> for FluidLattice<T> {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let r = Record::<T>::deserialize(d)?;
+        let (nx, ny) = (r.nx, r.ny);
+        let mut lattice = FluidLattice::<T>::new(nx, ny, r.bc, r.params)
+            .map_err(|e| D::Error::custom(e.to_string()))?;
+        if r.flags.len() != lattice.shape.nodes() {
+            return Err(D::Error::custom(format!(
+                "{} node flags for a {nx} x {ny} lattice",
+                r.flags.len()
+            )));
+        }
+        if r.populations.len() != lattice.shape.buffer_len() {
+            return Err(D::Error::custom(format!(
+                "{} populations for a {nx} x {ny} lattice",
+                r.populations.len()
+            )));
+        }
+        lattice.flags = r.flags.into_owned();
+        lattice.reclassify();
+        lattice.first_is_current = true;
+        lattice.populations_mut().copy_from_slice(&r.populations);
+        lattice.steps = r.steps;
+        lattice.solid_operator = r.solid_operator;
+        lattice
+            .set_collision(r.collision)
+            .map_err(|e| D::Error::custom(e.to_string()))?;
+        if let Some(c) = r.coverage {
+            let c = c.into_owned();
+            let n = c.shares.len();
+            let consistent = c.offsets.len() == c.nodes.len() + 1
+                && c.offsets.first() == Some(&0)
+                && c.offsets.last().map(|&o| o as usize) == Some(n)
+                && c.offsets.windows(2).all(|w| w[0] <= w[1])
+                && c.nodes
+                    .iter()
+                    .all(|&k| (k as usize) < lattice.shape.nodes())
+                && c.nodes.windows(2).all(|w| w[0] < w[1])
+                && c.owners.len() == n
+                && c.share_nodes.len() == n
+                && c.exchange.len() == n;
+            if !consistent {
+                return Err(D::Error::custom(
+                    "PSM coverage lists do not match each other or the lattice",
+                ));
+            }
+            lattice.coverage = Some(c);
+            lattice.refresh_links();
+        }
+        let profiles = r.profiles.into_owned();
+        for (k, p) in profiles.iter().enumerate() {
+            if p.len() != lattice.profiles[k].len() {
+                return Err(D::Error::custom(format!(
+                    "side profile {k} (west, east, south, north) of {} values for a {nx} x {ny} lattice \
+                     that expects {}",
+                    p.len(),
+                    lattice.profiles[k].len()
+                )));
+            }
+        }
+        super::side_profiles(&profiles)
+            .validate(&lattice.bc, nx, ny)
+            .map_err(|e| D::Error::custom(format!("side profiles refused: {e:?}")))?;
+        lattice.profiles = profiles;
+        Ok(lattice)
+    }
+}

@@ -1,0 +1,410 @@
+//! `kind = "consolidation"`: free grains under a step load, drained at the top (Terzaghi-type consolidation,
+//! dissertation §5.6.4, fig. 5.11–5.13). See [`Consolidation`].
+use std::path::Path;
+
+use lbdem_kernels::dem::assembly::ContactModel;
+use lbdem_kernels::fluid::boundary::{Boundaries, SideCondition};
+use lbdem_kernels::fluid::collide::{SolidOperator, Weighting};
+use lbdem_kernels::fluid::step::FluidParams;
+use serde::{Deserialize, Serialize};
+
+use crate::engine::coupled::{CoupledWorld, LatticeMap};
+use crate::engine::dem::packing::{boxed_sample, hexagonal_packing};
+use crate::engine::dem::DemWorld;
+use crate::engine::exec::Exec;
+use crate::engine::lattice::FluidLattice;
+use crate::error::{positive, LbdemError, Result};
+use crate::observe::health::{dem_health, finite, fluid_health};
+use crate::output::{csv, write_atomic};
+use crate::run::{run_in_memory, Case, CheckpointInterval, Kind, OutputStage, Persist, RunOptions};
+use crate::scene::{CheckpointSection, SceneHeader, UnitLabels, UnitsSetup};
+use crate::units::FluidSection;
+
+/// `[consolidation]`
+#[derive(Clone, Debug, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct ConsolidationSection {
+    /// Grains per row of the hexagonal pack.
+    pub columns: usize,
+    /// Rows of the pack.
+    pub rows: usize,
+    /// Grain radius.
+    pub radius: f64,
+    /// Relative radius jitter in [0, 0.5).
+    pub jitter: f64,
+    /// Packing seed.
+    pub seed: u64,
+    /// Grain density (unit thickness).
+    pub grain_density: f64,
+    /// Fraction of each radius the fluid sees.
+    pub fluid_radius: f64,
+    /// Contact normal (= shear) stiffness, force/length.
+    pub normal_stiffness: f64,
+    /// Contact friction.
+    pub friction: f64,
+    /// Step load on the top row of grains (force per unit length).
+    pub load: f64,
+    /// Model time simulated.
+    pub duration: f64,
+}
+
+/// A consolidation scene file.
+#[derive(Clone, Debug, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct ConsolidationScene {
+    /// `[scene]`
+    pub scene: SceneHeader,
+    /// `[fluid]`
+    pub fluid: FluidSection,
+    /// `[consolidation]`
+    pub consolidation: ConsolidationSection,
+    /// `[run]`
+    #[serde(default)]
+    pub run: CheckpointSection,
+}
+
+/// Outcome of a consolidation run.
+#[derive(Clone, Debug, Serialize)]
+pub struct ConsolidationOutcome {
+    /// Lattice size.
+    pub nodes: [usize; 2],
+    /// DEM sub-steps per fluid step.
+    pub substeps: u32,
+    /// Peak of the bottom pore pressure over the load.
+    pub peak_pressure: f64,
+    /// Time of the peak (physical).
+    pub peak_time: f64,
+    /// Bottom pore pressure over the load at the end.
+    pub final_pressure: f64,
+    /// (physical time, bottom pore pressure / load) every 10 fluid steps.
+    pub series: Vec<[f64; 2]>,
+}
+
+/// The run: the coupled world, the probe and the series so far.
+#[derive(Serialize, Deserialize)]
+pub struct ConsolidationState {
+    world: CoupledWorld,
+    nx: usize,
+    ny: usize,
+    probe_rows: usize,
+    substeps: u32,
+    steps: u64,
+    s: u64,
+    series: Vec<[f64; 2]>,
+    peak: (f64, f64),
+}
+
+impl Persist for ConsolidationState {}
+
+fn start(case: &Case<Consolidation>, exec: &Exec) -> Result<ConsolidationState> {
+    let c = &case.scene.consolidation;
+    let u = &case.setup.units;
+    let h = u.spacing;
+    let parts = hexagonal_packing(
+        c.columns,
+        c.rows,
+        c.radius,
+        1.0,
+        c.jitter,
+        c.grain_density,
+        c.seed,
+    );
+    let model = ContactModel {
+        normal_stiffness: c.normal_stiffness,
+        shear_stiffness: c.normal_stiffness,
+        friction: c.friction,
+        restitution: 1.0,
+        no_tension: true,
+    };
+    // Critical step first (with a tiny step that always passes), then the sub-step count.
+    let probe = DemWorld::new(parts.clone(), model, 1e-300)?;
+    let critical = probe.critical_time_step();
+    let substeps = (u.timestep / (0.5 * critical)).ceil().max(1.0) as u32;
+    let mut pk = boxed_sample(parts, model, u.timestep / substeps as f64, None, 0.0)?;
+    let (lo, hi) = pk.world.bounds();
+    pk.world.platens[pk.sample_box.top].active = false;
+    let tops = pk.world.boundary_particles(3, 0.5 * c.radius);
+    let width = hi[0] - lo[0];
+    let total_r: f64 = tops
+        .iter()
+        .map(|&i| pk.world.particles[i].shape.bounding_radius())
+        .sum();
+    let nx = (width / h).round() as usize;
+    let probe_rows = ((2.0 * c.radius / h).round() as usize).max(1);
+    let ny = ((hi[1] - lo[1]) / h).round() as usize + probe_rows;
+    let mut fluid = FluidLattice::<f64>::new(
+        nx,
+        ny,
+        Boundaries {
+            west: SideCondition::Wall,
+            east: SideCondition::Wall,
+            south: SideCondition::Wall,
+            north: SideCondition::Pressure { density: 1.0 },
+        },
+        FluidParams {
+            tau: u.tau,
+            force: [0.0; 2],
+        },
+    )?;
+    exec.apply(&mut fluid);
+    fluid.set_solid_operator(SolidOperator::LinearizedNonEquilibriumBounceBack);
+    let map = LatticeMap::of(u, [lo[0] - 0.5 * h, lo[1] - 0.5 * h]);
+    let mut world = CoupledWorld::new(
+        fluid,
+        pk.world,
+        map,
+        c.fluid_radius,
+        Weighting::NobleTorczynski,
+        substeps,
+    )?;
+    for &i in &tops {
+        let share = c.load * width * world.dem.particles[i].shape.bounding_radius() / total_r;
+        world.applied[i] = ([0.0, -share], 0.0);
+    }
+    let steps = u.time_to_steps(c.duration).round().max(10.0) as u64;
+    Ok(ConsolidationState {
+        world,
+        nx,
+        ny,
+        probe_rows,
+        substeps,
+        steps,
+        s: 0,
+        series: Vec::new(),
+        peak: (0.0, f64::NEG_INFINITY),
+    })
+}
+
+impl ConsolidationState {
+    /// Up to 500 steps, recording the bottom pore pressure every 10 steps.
+    fn advance(&mut self, case: &Case<Consolidation>) -> Result<()> {
+        let u = &case.setup.units;
+        let load = u.pressure_to_density_change(case.scene.consolidation.load); // as a lattice density change
+        let (nx, probe_rows) = (self.nx, self.probe_rows);
+        let end = ((self.s / 500 + 1) * 500).min(self.steps);
+        for s in self.s + 1..=end {
+            self.world.step();
+            if s.is_multiple_of(10) {
+                let eps = self.world.fluid.solid_fraction_map();
+                let (rho, _) = self.world.fluid.moments();
+                let (mut sum, mut n) = (0.0, 0usize);
+                for y in 0..probe_rows {
+                    for x in 0..nx {
+                        let i = y * nx + x;
+                        if eps[i] == 0.0 {
+                            sum += rho[i];
+                            n += 1;
+                        }
+                    }
+                }
+                let p = finite(
+                    "bottom pore pressure",
+                    (sum / n.max(1) as f64 - 1.0) / load,
+                    s,
+                    "lower the load or the stiffness",
+                )?;
+                let t = s as f64 * u.timestep;
+                if p > self.peak.1 {
+                    self.peak = (t, p);
+                }
+                self.series.push([t, p]);
+            }
+        }
+        self.s = end;
+        Ok(())
+    }
+
+    fn outcome(&self) -> ConsolidationOutcome {
+        ConsolidationOutcome {
+            nodes: [self.nx, self.ny],
+            substeps: self.substeps,
+            peak_pressure: self.peak.1,
+            peak_time: self.peak.0,
+            final_pressure: self.series.last().map_or(f64::NAN, |r| r[1]),
+            series: self.series.clone(),
+        }
+    }
+}
+
+/// Run a consolidation case in memory to its end.
+pub fn simulate(case: &Case<Consolidation>) -> Result<ConsolidationOutcome> {
+    let (state, _) = run_in_memory(case, &RunOptions::default())?;
+    Ok(state.outcome())
+}
+
+/// The consolidation kind (dissertation §5.6.4, fig. 5.11–5.13): a hexagonal pack of free grains in a box
+/// of DEM platens with the top platen removed, a step load on the top row of grains (as forces, so the load is
+/// applied at once whatever the stiffness; a servo platen's loading rate ∝ 1/k_n would bias the trend), fluid
+/// walls west/east/south and a drained top (Zou–He P = 0) above the grains. Solid operator **Ω₁ₗ** (the
+/// linearised Ω₁): Ω₃ is unstable for free grains (`crate::kinds::terminal_velocity::omega3_free_grain_growth`) and Ω₁ accumulates mass inside
+/// the grains with a pressure boundary; Ω₁ₗ keeps Ω₁'s exchange without either problem. The pore pressure is the fluid-only (ε = 0) mean
+/// in the bottom grain-diameter of the pack. The DEM is sub-stepped to stay below its critical step.
+pub struct Consolidation;
+
+impl Kind for Consolidation {
+    const NAME: &'static str = "consolidation";
+    type Scene = ConsolidationScene;
+    type Setup = UnitsSetup;
+    type State = ConsolidationState;
+
+    fn validate(scene: &ConsolidationScene) -> Result<()> {
+        scene.scene.require_f64()?;
+        let u = scene.fluid.lattice_units()?;
+
+        let c = &scene.consolidation;
+        positive("consolidation.radius", c.radius, "grain radius")?;
+        positive("consolidation.grain_density", c.grain_density, "e.g. 2.65")?;
+        positive(
+            "consolidation.normal_stiffness",
+            c.normal_stiffness,
+            "contact stiffness, force/length",
+        )?;
+        positive("consolidation.load", c.load, "step load")?;
+        positive("consolidation.duration", c.duration, "model time")?;
+        if c.columns < 2 || c.rows < 2 {
+            return Err(LbdemError::field(
+                "consolidation.columns/rows",
+                format!("{} x {}", c.columns, c.rows),
+                "need at least 2 x 2 grains",
+                "e.g. 10 x 8",
+            ));
+        }
+        if !(c.jitter >= 0.0 && c.jitter < 0.5) {
+            return Err(LbdemError::field(
+                "consolidation.jitter",
+                c.jitter,
+                "must lie in [0, 0.5)",
+                "e.g. 0.05",
+            ));
+        }
+        if !(c.fluid_radius > 0.0 && c.fluid_radius <= 1.0) {
+            return Err(LbdemError::field(
+                "consolidation.fluid_radius",
+                c.fluid_radius,
+                "must lie in (0, 1]",
+                "the dissertation uses 0.6-0.95",
+            ));
+        }
+        if !(c.friction >= 0.0 && c.friction.is_finite()) {
+            return Err(LbdemError::field(
+                "consolidation.friction",
+                c.friction,
+                "must be >= 0",
+                "e.g. 0.5",
+            ));
+        }
+        let drho = u.pressure_to_density_change(c.load);
+        if drho > 0.01 {
+            return Err(LbdemError::field(
+                "consolidation.load",
+                c.load,
+                &format!(
+                    "gives a lattice density change {drho:.3e} > 1e-2 if the fluid carries it"
+                ),
+                "lower the load, or shorten fluid.timestep",
+            ));
+        }
+        if u.length_to_lattice(c.radius) * c.fluid_radius < 2.0 {
+            return Err(LbdemError::field(
+                "consolidation.radius",
+                c.radius,
+                "is seen by the fluid as fewer than 2 lattice spacings",
+                "refine fluid.spacing",
+            ));
+        }
+        Ok(())
+    }
+
+    fn setup(scene: &ConsolidationScene) -> Result<UnitsSetup> {
+        UnitsSetup::new(&scene.fluid)
+    }
+
+    fn describe(case: &Case<Self>) -> String {
+        let labels = case.scene.scene.units.labels();
+        case.setup.describe(labels)
+            + &{
+                let c = &case.scene.consolidation;
+                let u = &case.setup.units;
+                let mut s = String::new();
+                s += &format!(
+                "  {} x {} grains of radius {:.2} nodes; stiffness {:.4e}, load {:.4e} (lattice); {} steps\n",
+                c.columns,
+                c.rows,
+                u.length_to_lattice(c.radius),
+                u.force_to_lattice(c.normal_stiffness) * u.spacing,
+                u.force_to_lattice(c.load) * u.spacing,
+                u.time_to_steps(c.duration).round()
+            );
+                s
+            }
+    }
+
+    fn warnings(case: &Case<Self>) -> Vec<String> {
+        case.setup.warnings.clone()
+    }
+
+    fn units(scene: &ConsolidationScene) -> UnitLabels {
+        scene.scene.units.labels()
+    }
+
+    fn checkpoint_interval(scene: &ConsolidationScene) -> CheckpointInterval {
+        scene.run.checkpoint_interval
+    }
+
+    fn start(case: &Case<Self>, exec: &Exec) -> Result<ConsolidationState> {
+        start(case, exec)
+    }
+
+    fn resume(_case: &Case<Self>, state: &mut ConsolidationState, exec: &Exec) -> Result<()> {
+        exec.apply(&mut state.world.fluid);
+        Ok(())
+    }
+
+    fn steps_done(state: &ConsolidationState) -> u64 {
+        state.s
+    }
+
+    fn total_steps(_case: &Case<Self>, state: &ConsolidationState) -> Option<u64> {
+        Some(state.steps)
+    }
+
+    fn finished(_case: &Case<Self>, state: &ConsolidationState) -> bool {
+        state.s >= state.steps
+    }
+
+    fn advance(
+        case: &Case<Self>,
+        state: &mut ConsolidationState,
+        _dir: Option<&Path>,
+    ) -> Result<()> {
+        state.advance(case)
+    }
+
+    fn health(_case: &Case<Self>, state: &ConsolidationState) -> Result<()> {
+        fluid_health(&state.world.fluid, "lower the load or the stiffness")?;
+        dem_health(&state.world.dem)
+    }
+
+    fn write_outputs(
+        _case: &Case<Self>,
+        state: &ConsolidationState,
+        dir: &Path,
+        stage: OutputStage,
+    ) -> Result<()> {
+        if stage == OutputStage::Checkpoint {
+            return Ok(());
+        }
+        let series = csv(
+            &["time", "bottom_pressure_over_load"],
+            state.series.iter().map(|r| r.to_vec()),
+        );
+        write_atomic(&dir.join("series.csv"), series.as_bytes())
+    }
+
+    fn results(_case: &Case<Self>, state: &ConsolidationState) -> Result<serde_json::Value> {
+        let mut o = state.outcome();
+        // The series is in series.csv.
+        o.series.clear();
+        Ok(serde_json::to_value(&o).unwrap_or_default())
+    }
+}

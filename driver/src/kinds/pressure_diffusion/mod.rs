@@ -1,0 +1,597 @@
+//! `kind = "pressure_diffusion"`: 1-D transient pressure diffusion through a packed slab (dissertation §5.6.2,
+//! fig. 5.7–5.9, eq. 5.12).
+//!
+//! A slab of packed grains (the dissertation's packing procedure) between Zou–He pressure faces at x = 0 and
+//! x = 2L (walls north and south), fluid at initial overpressure P₀, faces at P = 0. The grains are **held
+//! fixed**: the fluid storage is then the LB fluid compressibility alone, so the continuum prediction has no
+//! free parameter (the dissertation's grains were free but unbonded quartz, whose skeleton compliance is
+//! negligible against the LB fluid's). Darcy + mass conservation with p = c_s²ρ and μ = ρν give
+//! n ∂ρ/∂t = ∇·((k c_s²/ν)∇ρ), i.e. **c = k c_s²/(ν n)** (lattice units). k is measured first by a steady
+//! Zou–He Darcy run on the same coverage ([`crate::observe::darcy`]), k = ν j 2L/(c_s² Δρ) with j the mass flux
+//! per unit width; n is the effective storage porosity measured from the fluid mass the slab releases,
+//! n = ΔM/(A P₀' (1 − P̄/P₀)) (A = 2L × width, P₀' the initial density excess, P̄/P₀ the analytic mean at the
+//! last snapshot). The effective n differs from the geometric 1 − ⟨ε⟩ because fluid on links between two fully
+//! covered nodes is trapped by Ω₃'s bounce-back (never drains) while partially covered nodes store fully: both
+//! porosities are reported. The diffusivity is fitted to cross-section averages over fluid-only nodes (ε = 0, as
+//! the dissertation did) of P/P₀ at several times, by Gauss–Newton on ln c with `faer`
+//! ([`crate::observe::fit::fit_diffusivity`]), to the slab series
+//! ([`lbdem_reference::analytic::slab_pressure`]).
+use std::path::Path;
+
+use lbdem_kernels::coupling::{BodyShape, CoupledBody};
+use lbdem_kernels::fluid::boundary::{Boundaries, SideCondition};
+use lbdem_kernels::fluid::collide::{SolidOperator, Weighting};
+use lbdem_kernels::fluid::step::FluidParams;
+use lbdem_reference::analytic::{slab_mean_pressure, slab_pressure};
+use serde::{Deserialize, Serialize};
+
+use crate::engine::dem::packing::{generate_packing, PackingSpec};
+use crate::engine::exec::Exec;
+use crate::engine::lattice::FluidLattice;
+use crate::error::{positive, LbdemError, Result};
+use crate::observe::darcy::{permeability, SteadyFlow};
+use crate::observe::fit::fit_diffusivity;
+use crate::observe::health::fluid_health;
+use crate::observe::steady::Steadiness;
+use crate::output::{csv, write_atomic};
+use crate::run::{run_in_memory, Case, CheckpointInterval, Kind, OutputStage, Persist, RunOptions};
+use crate::scene::{CheckpointSection, SceneHeader, UnitLabels, UnitsSetup};
+use crate::units::FluidSection;
+
+/// Lattice sound speed squared c_s² = 1/3.
+const CS2: f64 = 1.0 / 3.0;
+
+/// Relative change of the outlet flux per 200 steps below which the Darcy run counts as steady. The slowest
+/// mode of the approach decays over (2L)²/(π² c) steps (~2 000 in the fast scene), so the flux left to gain is
+/// about this × (decay time / 200) ≈ 1e-4 relative: far below the other errors of the check.
+const DARCY_TOLERANCE: f64 = 1e-5;
+
+const HINT: &str =
+    "lower pressure_diffusion.overpressure or darcy_pressure_drop, or raise fluid.tau";
+
+/// `[pressure_diffusion]`
+#[derive(Clone, Debug, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct PressureDiffusionSection {
+    /// Width of the packing box along x (the drained direction).
+    pub width: f64,
+    /// Height of the packing box along y.
+    pub height: f64,
+    /// Smallest grain radius.
+    pub radius_min: f64,
+    /// Largest grain radius.
+    pub radius_max: f64,
+    /// Packing seed.
+    pub seed: u64,
+    /// Fraction of each grain's radius the fluid sees (dissertation 0.6–0.95).
+    pub fluid_radius: f64,
+    /// Initial overpressure P₀.
+    pub overpressure: f64,
+    /// Pressure drop of the steady Darcy run that measures k.
+    pub darcy_pressure_drop: f64,
+    /// Snapshot times as Fourier numbers c_pred t/L² (c_pred from the measured k and geometric porosity).
+    pub fourier_times: Vec<f64>,
+}
+
+/// A pressure-diffusion scene file.
+#[derive(Clone, Debug, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct PressureDiffusionScene {
+    /// `[scene]`
+    pub scene: SceneHeader,
+    /// `[fluid]`
+    pub fluid: FluidSection,
+    /// `[pressure_diffusion]`
+    pub pressure_diffusion: PressureDiffusionSection,
+    /// `[run]`
+    #[serde(default)]
+    pub run: CheckpointSection,
+}
+
+/// One recorded cross-section-averaged profile.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct Profile {
+    /// Step of the snapshot.
+    pub step: u64,
+    /// Fourier number c_fit t/L².
+    pub fourier: f64,
+    /// (distance from the west face in nodes, measured P/P₀, fitted P/P₀).
+    pub points: Vec<(f64, f64, f64)>,
+}
+
+/// Outcome of a pressure-diffusion run (lattice units unless said).
+#[derive(Clone, Debug, Serialize)]
+pub struct DiffusionOutcome {
+    /// Lattice size.
+    pub nodes: [usize; 2],
+    /// Grains in the slab.
+    pub grains: usize,
+    /// Half-length L of the slab (nodes): faces at x = 0 and 2L.
+    pub half_length: f64,
+    /// Geometric porosity 1 − ⟨ε⟩ over the interior.
+    pub geometric_porosity: f64,
+    /// Storage porosity measured from the mass released.
+    pub storage_porosity: f64,
+    /// Darcy permeability k (nodes²).
+    pub permeability: f64,
+    /// k in physical units.
+    pub permeability_physical: f64,
+    /// Steps of the Darcy run.
+    pub darcy_steps: u64,
+    /// Predicted c = k c_s²/(ν n_storage).
+    pub predicted_diffusivity: f64,
+    /// Predicted c with the geometric porosity.
+    pub predicted_diffusivity_geometric: f64,
+    /// Fitted c (nodes²/step).
+    pub fitted_diffusivity: f64,
+    /// Fitted c in physical units.
+    pub fitted_diffusivity_physical: f64,
+    /// fitted / predicted − 1.
+    pub diffusivity_error: f64,
+    /// RMS of P/P₀ − fit over all samples.
+    pub rms_residual: f64,
+    /// Gauss–Newton iterations.
+    pub fit_iterations: usize,
+    /// Samples fitted.
+    pub samples: usize,
+    /// The snapshots.
+    pub profiles: Vec<Profile>,
+}
+
+/// The run: the Darcy lattice until its flow is steady, then the drainage of the overpressured slab.
+#[derive(Serialize, Deserialize)]
+pub struct DiffusionState {
+    grains: usize,
+    nx: usize,
+    ny: usize,
+    darcy: Option<FluidLattice<f64>>,
+    flow: SteadyFlow,
+    drho_d: f64,
+    permeability: f64,
+    geometric_porosity: f64,
+    c_geo: f64,
+    fluid: FluidLattice<f64>,
+    drho: f64,
+    m0: f64,
+    times: Vec<u64>,
+    columns: Vec<(usize, Vec<usize>)>,
+    raw: Vec<(u64, Vec<(f64, f64)>)>,
+    step: u64,
+}
+
+impl Persist for DiffusionState {}
+
+fn start(case: &Case<PressureDiffusion>, exec: &Exec) -> Result<DiffusionState> {
+    let d = &case.scene.pressure_diffusion;
+    let u = &case.setup.units;
+    let h = u.spacing;
+    // The packing (physical units), by the dissertation's procedure.
+    let mut spec = PackingSpec::dissertation(d.width, d.height, 1.0, d.seed);
+    spec.radius_min = d.radius_min;
+    spec.radius_max = d.radius_max;
+    let packing = generate_packing(&spec, None)?;
+    let world = packing.world;
+    let (lo, hi) = world.bounds();
+    // Lattice: Zou–He faces at the slab faces x = lo, hi; walls half a spacing outside the first/last rows.
+    let nx = ((hi[0] - lo[0]) / h).round() as usize + 1;
+    let ny = ((hi[1] - lo[1]) / h).round().max(1.0) as usize;
+    let map_x = |x: f64| (x - lo[0]) / h;
+    let map_y = |y: f64| (y - lo[1]) / h - 0.5;
+    let bodies: Vec<CoupledBody<f64>> = world
+        .particles
+        .iter()
+        .map(|p| CoupledBody {
+            center: [map_x(p.position[0]), map_y(p.position[1])],
+            velocity: [0.0; 2],
+            spin: 0.0,
+            shape: BodyShape::Disc {
+                radius: p.shape.bounding_radius() / h * d.fluid_radius,
+            },
+        })
+        .collect();
+    let tau = u.tau;
+    let wf = Weighting::NobleTorczynski;
+    let make = |west: f64, east: f64| -> Result<FluidLattice<f64>> {
+        let mut f = FluidLattice::new(
+            nx,
+            ny,
+            Boundaries {
+                west: SideCondition::Pressure { density: west },
+                east: SideCondition::Pressure { density: east },
+                south: SideCondition::Wall,
+                north: SideCondition::Wall,
+            },
+            FluidParams {
+                tau,
+                force: [0.0; 2],
+            },
+        )?;
+        exec.apply(&mut f);
+        f.set_solid_operator(SolidOperator::MovingWallBounceBack);
+        f.cover_with_bodies(&bodies, wf);
+        Ok(f)
+    };
+    let two_l = (nx - 1) as f64;
+    // 1. Steady Darcy run: k = ν j 2L/(c_s² Δρ).
+    let drho_d = u.pressure_to_density_change(d.darcy_pressure_drop);
+    let mut darcy = make(1.0 + drho_d, 1.0)?;
+    darcy.fill_equilibrium(|x, _| (1.0 + drho_d * (1.0 - x as f64 / two_l), [0.0; 2]));
+    // 2. Transient drainage from P₀ (stepped once the Darcy run is steady).
+    let drho = u.pressure_to_density_change(d.overpressure);
+    let mut fluid = make(1.0, 1.0)?;
+    fluid.fill_equilibrium(|x, _| {
+        if x == 0 || x + 1 == nx {
+            (1.0, [0.0; 2])
+        } else {
+            (1.0 + drho, [0.0; 2])
+        }
+    });
+    let m0 = fluid.mass();
+    Ok(DiffusionState {
+        grains: world.particles.len(),
+        nx,
+        ny,
+        darcy: Some(darcy),
+        flow: SteadyFlow::new(Steadiness::new(DARCY_TOLERANCE, false), 200, 400_000),
+        drho_d,
+        permeability: f64::NAN,
+        geometric_porosity: f64::NAN,
+        c_geo: f64::NAN,
+        fluid,
+        drho,
+        m0,
+        times: Vec::new(),
+        columns: Vec::new(),
+        raw: Vec::new(),
+        step: 0,
+    })
+}
+
+impl DiffusionState {
+    fn finished(&self) -> bool {
+        self.darcy.is_none() && self.raw.len() >= self.times.len()
+    }
+
+    fn advance(&mut self, case: &Case<PressureDiffusion>) -> Result<()> {
+        let (nx, ny) = (self.nx, self.ny);
+        let nu = case.setup.units.lattice_viscosity;
+        let two_l = (nx - 1) as f64;
+        let half_length = 0.5 * two_l;
+        if let Some(darcy) = &mut self.darcy {
+            let outlet_flux = |f: &FluidLattice<f64>| -> f64 {
+                let (rho, vel) = f.moments();
+                (0..ny)
+                    .map(|y| {
+                        let i = y * nx + (nx - 1);
+                        rho[i] * vel[i][0]
+                    })
+                    .sum::<f64>()
+                    / ny as f64
+            };
+            if !self.flow.advance(darcy, outlet_flux, HINT)? {
+                return Ok(());
+            }
+            let k = permeability(nu, self.flow.flux, two_l, CS2 * self.drho_d);
+            let eps = darcy.solid_fraction_map();
+            let interior = |i: usize| {
+                let x = i % nx;
+                x > 0 && x + 1 < nx
+            };
+            let geometric_porosity = 1.0
+                - eps
+                    .iter()
+                    .enumerate()
+                    .filter(|(i, _)| interior(*i))
+                    .map(|(_, e)| e)
+                    .sum::<f64>()
+                    / ((nx - 2) * ny) as f64;
+            let c_geo = k * CS2 / (nu * geometric_porosity);
+            let mut times: Vec<u64> = case
+                .scene
+                .pressure_diffusion
+                .fourier_times
+                .iter()
+                .map(|f| (f * half_length * half_length / c_geo).round().max(1.0) as u64)
+                .collect();
+            times.sort_unstable();
+            times.dedup();
+            // Columns with fluid-only nodes, and those nodes.
+            self.columns = (1..nx - 1)
+                .map(|x| {
+                    (
+                        x,
+                        (0..ny)
+                            .map(|y| y * nx + x)
+                            .filter(|&i| eps[i] == 0.0)
+                            .collect::<Vec<_>>(),
+                    )
+                })
+                .filter(|(_, v)| !v.is_empty())
+                .collect();
+            self.permeability = k;
+            self.geometric_porosity = geometric_porosity;
+            self.c_geo = c_geo;
+            self.times = times;
+            self.darcy = None;
+            return Ok(());
+        }
+        let Some(&target) = self.times.get(self.raw.len()) else {
+            return Ok(());
+        };
+        // Up to the next snapshot, at most 1000 steps at a time.
+        let end = target.min((self.step / 1000 + 1) * 1000);
+        while self.step < end {
+            self.fluid.step();
+            self.step += 1;
+        }
+        if self.step == target {
+            let (rho, _) = self.fluid.moments();
+            let drho = self.drho;
+            let prof = self
+                .columns
+                .iter()
+                .map(|(x, nodes)| {
+                    let mean = nodes.iter().map(|&i| rho[i]).sum::<f64>() / nodes.len() as f64;
+                    (*x as f64, (mean - 1.0) / drho)
+                })
+                .collect();
+            self.raw.push((self.step, prof));
+        }
+        Ok(())
+    }
+
+    fn outcome(&self, case: &Case<PressureDiffusion>) -> DiffusionOutcome {
+        let (nx, ny) = (self.nx, self.ny);
+        let nu = case.setup.units.lattice_viscosity;
+        let two_l = (nx - 1) as f64;
+        let half_length = 0.5 * two_l;
+        let (fluid, m0, drho, raw, times) =
+            (&self.fluid, self.m0, self.drho, &self.raw, &self.times);
+        let (k, geometric_porosity, c_geo) =
+            (self.permeability, self.geometric_porosity, self.c_geo);
+        let darcy_steps = self.flow.steps;
+        let released = m0 - fluid.mass();
+        // 3. Fit c.
+        let samples: Vec<(f64, f64, f64)> = raw
+            .iter()
+            .flat_map(|(s, prof)| {
+                prof.iter()
+                    .map(move |&(x, p)| (x - half_length, *s as f64, p))
+            })
+            .collect();
+        let (c_fit, rms, iterations) = fit_diffusivity(&samples, half_length, c_geo);
+        let t_end = *times.last().unwrap_or(&1) as f64;
+        let storage_porosity = released
+            / (two_l * ny as f64 * drho * (1.0 - slab_mean_pressure(t_end, c_fit, half_length)));
+        let c_pred = k * CS2 / (nu * storage_porosity);
+        let profiles = raw
+            .iter()
+            .map(|(s, prof)| Profile {
+                step: *s,
+                fourier: c_fit * *s as f64 / (half_length * half_length),
+                points: prof
+                    .iter()
+                    .map(|&(x, p)| {
+                        (
+                            x,
+                            p,
+                            slab_pressure(x - half_length, *s as f64, c_fit, half_length).0,
+                        )
+                    })
+                    .collect(),
+            })
+            .collect();
+        DiffusionOutcome {
+            nodes: [nx, ny],
+            grains: self.grains,
+            half_length,
+            geometric_porosity,
+            storage_porosity,
+            permeability: k,
+            permeability_physical: case.setup.units.permeability_to_physical(k),
+            darcy_steps,
+            predicted_diffusivity: c_pred,
+            predicted_diffusivity_geometric: c_geo,
+            fitted_diffusivity: c_fit,
+            fitted_diffusivity_physical: case.setup.units.diffusivity_to_physical(c_fit),
+            diffusivity_error: c_fit / c_pred - 1.0,
+            rms_residual: rms,
+            fit_iterations: iterations,
+            samples: samples.len(),
+            profiles,
+        }
+    }
+}
+
+/// Run a pressure-diffusion case in memory to its end.
+pub fn simulate(case: &Case<PressureDiffusion>) -> Result<DiffusionOutcome> {
+    let (state, _) = run_in_memory(case, &RunOptions::default())?;
+    Ok(state.outcome(case))
+}
+
+fn profiles_csv(o: &DiffusionOutcome) -> String {
+    let mut rows = Vec::new();
+    for p in &o.profiles {
+        for (x, v, m) in &p.points {
+            rows.push(vec![p.step as f64, p.fourier, *x, *v, *m]);
+        }
+    }
+    csv(
+        &[
+            "step",
+            "fourier_number",
+            "x_from_face",
+            "p_over_p0",
+            "fitted",
+        ],
+        rows,
+    )
+}
+
+/// The pressure-diffusion kind.
+pub struct PressureDiffusion;
+
+impl Kind for PressureDiffusion {
+    const NAME: &'static str = "pressure_diffusion";
+    type Scene = PressureDiffusionScene;
+    type Setup = UnitsSetup;
+    type State = DiffusionState;
+
+    fn validate(scene: &PressureDiffusionScene) -> Result<()> {
+        scene.scene.require_f64()?;
+        let u = scene.fluid.lattice_units()?;
+
+        let d = &scene.pressure_diffusion;
+        positive("pressure_diffusion.width", d.width, "slab width")?;
+        positive("pressure_diffusion.height", d.height, "slab height")?;
+        positive(
+            "pressure_diffusion.radius_min",
+            d.radius_min,
+            "e.g. 0.07 cm",
+        )?;
+        positive(
+            "pressure_diffusion.radius_max",
+            d.radius_max,
+            "e.g. 0.11 cm",
+        )?;
+        positive(
+            "pressure_diffusion.overpressure",
+            d.overpressure,
+            "initial P0",
+        )?;
+        positive(
+            "pressure_diffusion.darcy_pressure_drop",
+            d.darcy_pressure_drop,
+            "pressure drop of the permeability run",
+        )?;
+        if !(d.fluid_radius > 0.0 && d.fluid_radius <= 1.0) {
+            return Err(LbdemError::field(
+                "pressure_diffusion.fluid_radius",
+                d.fluid_radius,
+                "must lie in (0, 1]",
+                "the dissertation uses 0.6-0.95",
+            ));
+        }
+        if d.fourier_times.is_empty()
+            || d.fourier_times.iter().any(|t| !(t.is_finite() && *t > 0.0))
+        {
+            return Err(LbdemError::field(
+                "pressure_diffusion.fourier_times",
+                format!("{:?}", d.fourier_times),
+                "must be a non-empty list of positive Fourier numbers c t / L^2",
+                "e.g. [0.05, 0.1, 0.2, 0.4, 0.8, 1.5]",
+            ));
+        }
+        for (field, p) in [
+            ("pressure_diffusion.overpressure", d.overpressure),
+            (
+                "pressure_diffusion.darcy_pressure_drop",
+                d.darcy_pressure_drop,
+            ),
+        ] {
+            let drho = u.pressure_to_density_change(p);
+            if drho > 0.01 {
+                return Err(LbdemError::field(
+                    field,
+                    p,
+                    &format!("gives a lattice density change {drho:.3e} > 1e-2: Darcy's law would pick up compressibility and inertia errors"),
+                    "lower it, or shorten fluid.timestep (raising the lattice sound speed)",
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    fn setup(scene: &PressureDiffusionScene) -> Result<UnitsSetup> {
+        UnitsSetup::new(&scene.fluid)
+    }
+
+    fn describe(case: &Case<Self>) -> String {
+        let labels = case.scene.scene.units.labels();
+        case.setup.describe(labels)
+            + &{
+                let d = &case.scene.pressure_diffusion;
+                let u = &case.setup.units;
+                let l = labels;
+                let mut s = String::new();
+                s += &format!(
+                "  packing box {} x {} {}, about {:.0} x {:.0} nodes; overpressure -> lattice density excess {:.3e}; Darcy drop -> {:.3e}\n",
+                d.width,
+                d.height,
+                l.length,
+                u.length_to_lattice(d.width),
+                u.length_to_lattice(d.height),
+                u.pressure_to_density_change(d.overpressure),
+                u.pressure_to_density_change(d.darcy_pressure_drop)
+            );
+                s
+            }
+    }
+
+    fn warnings(case: &Case<Self>) -> Vec<String> {
+        case.setup.warnings.clone()
+    }
+
+    fn units(scene: &PressureDiffusionScene) -> UnitLabels {
+        scene.scene.units.labels()
+    }
+
+    fn checkpoint_interval(scene: &PressureDiffusionScene) -> CheckpointInterval {
+        scene.run.checkpoint_interval
+    }
+
+    fn start(case: &Case<Self>, exec: &Exec) -> Result<DiffusionState> {
+        start(case, exec)
+    }
+
+    fn resume(_case: &Case<Self>, state: &mut DiffusionState, exec: &Exec) -> Result<()> {
+        if let Some(d) = &mut state.darcy {
+            exec.apply(d);
+        }
+        exec.apply(&mut state.fluid);
+        Ok(())
+    }
+
+    fn steps_done(state: &DiffusionState) -> u64 {
+        state.flow.steps + state.step
+    }
+
+    fn total_steps(_case: &Case<Self>, state: &DiffusionState) -> Option<u64> {
+        state.times.last().map(|t| state.flow.steps + t)
+    }
+
+    fn finished(_case: &Case<Self>, state: &DiffusionState) -> bool {
+        state.finished()
+    }
+
+    fn advance(case: &Case<Self>, state: &mut DiffusionState, _dir: Option<&Path>) -> Result<()> {
+        state.advance(case)
+    }
+
+    fn health(_case: &Case<Self>, state: &DiffusionState) -> Result<()> {
+        match &state.darcy {
+            Some(d) => fluid_health(d, HINT),
+            None => fluid_health(&state.fluid, HINT),
+        }
+    }
+
+    fn write_outputs(
+        case: &Case<Self>,
+        state: &DiffusionState,
+        dir: &Path,
+        stage: OutputStage,
+    ) -> Result<()> {
+        if stage != OutputStage::Finished {
+            return Ok(());
+        }
+        let o = state.outcome(case);
+        write_atomic(&dir.join("profiles.csv"), profiles_csv(&o).as_bytes())
+    }
+
+    fn results(case: &Case<Self>, state: &DiffusionState) -> Result<serde_json::Value> {
+        let mut o = state.outcome(case);
+        // The profiles are in profiles.csv.
+        o.profiles.clear();
+        Ok(serde_json::to_value(&o).unwrap_or_default())
+    }
+}

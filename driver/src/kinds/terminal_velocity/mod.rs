@@ -1,0 +1,477 @@
+//! `kind = "terminal_velocity"`: a free disc under a constant force in a periodic box (dissertation §4.5.4;
+//! the coupled step's momentum balance and the drag on a moving grain).
+//!
+//! One free disc (solid fraction c = πa²/l²) in a periodic l × l box is pushed along x by a constant applied
+//! force F_a, and the fluid by the opposite body force −F_a spread over its nodes as the Guo force density g,
+//! weighted by 1 − B at covered nodes like every PSM body force: g = −F_a/Σ_n(1 − B_n) at the initial coverage.
+//! The net external impulse per step, F_a + g Σ_n (1 − B_n), is then ≈ 0 (exactly 0 at the initial coverage;
+//! the coverage of a moving disc changes a little), so the system reaches a steady state in the lab frame
+//! instead of accelerating for ever (a periodic box with a net force has no terminal velocity, only a terminal
+//! slip). *Momentum*: the PSM hands the grain exactly what the fluid loses and the leapfrog turns it into m Δv,
+//! so fluid + grain momentum changes each step by exactly the applied impulse F_a + g Σ_n (1 − B_n) (roundoff;
+//! tested). *Terminal slip*: at steady state the disc moves at V relative to the fluid. A uniform force density
+//! g on the fluid is a mean pressure gradient G = |g|, so Sangani & Acrivos's drag per cylinder is F = G l²
+//! (not F_a = G Σ(1 − B) ≈ G(1 − c)l²: the difference is the "buoyancy" G πa² of the mean gradient, which the
+//! held cylinder of S&A feels and the body-force-driven disc does not), and U is the **superficial** slip
+//! velocity U = Σ_n (1 − ε_n)(u_x,n − V)/l². F/(μU) is compared with S&A's table
+//! ([`lbdem_reference::analytic::SANGANI_ACRIVOS_SQUARE`]).
+use std::path::Path;
+
+use lbdem_kernels::coupling::{BodyShape, CoupledBody};
+use lbdem_kernels::dem::assembly::ContactModel;
+use lbdem_kernels::dem::shape::Particle;
+use lbdem_kernels::fluid::boundary::Boundaries;
+use lbdem_kernels::fluid::collide::{weighting, SolidOperator, Weighting};
+use lbdem_kernels::fluid::step::FluidParams;
+use lbdem_reference::analytic::sangani_acrivos_drag;
+use serde::{Deserialize, Serialize};
+
+use crate::engine::coupled::{CoupledWorld, LatticeMap};
+use crate::engine::dem::DemWorld;
+use crate::engine::exec::Exec;
+use crate::engine::lattice::FluidLattice;
+use crate::error::{positive, LbdemError, Result};
+use crate::observe::health::{dem_health, fluid_health};
+use crate::output::{csv, write_atomic};
+use crate::run::{run_in_memory, Case, CheckpointInterval, Kind, OutputStage, Persist, RunOptions};
+use crate::scene::{CheckpointSection, SceneHeader, UnitLabels, UnitsSetup};
+use crate::units::FluidSection;
+
+/// `[terminal_velocity]`
+#[derive(Clone, Debug, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct TerminalVelocitySection {
+    /// Side l of the periodic box.
+    pub cell: f64,
+    /// Solid fraction c = πa²/l² (sets the disc radius).
+    pub solid_fraction: f64,
+    /// Grain density (mass per area of the unit-thickness disc).
+    pub grain_density: f64,
+    /// Force per unit thickness applied to the disc along x.
+    pub applied_force: f64,
+    /// Model time simulated.
+    pub duration: f64,
+    /// Fraction of the run (at its end) over which the slip is averaged (default 0.2).
+    #[serde(default)]
+    pub average_fraction: Option<f64>,
+    /// Solid operator: "bounce_back" (Ω₁, default) or "superposition" (Ω₂). Ω₃ ("moving_wall") is refused for
+    /// a free grain: see [`omega3_free_grain_growth`].
+    #[serde(default)]
+    pub solid_operator: SolidOperator,
+}
+
+/// A terminal-velocity scene file.
+#[derive(Clone, Debug, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct TerminalVelocityScene {
+    /// `[scene]`
+    pub scene: SceneHeader,
+    /// `[fluid]`
+    pub fluid: FluidSection,
+    /// `[terminal_velocity]`
+    pub terminal_velocity: TerminalVelocitySection,
+    /// `[run]`
+    #[serde(default)]
+    pub run: CheckpointSection,
+}
+
+/// Outcome of a terminal-velocity run (lattice units unless said).
+#[derive(Clone, Debug, Serialize)]
+pub struct TerminalOutcome {
+    /// Box side (nodes).
+    pub cell: usize,
+    /// Disc radius (nodes).
+    pub radius: f64,
+    /// Solid fraction πa²/l².
+    pub solid_fraction: f64,
+    /// Applied force on the disc.
+    pub applied_force: f64,
+    /// Body-force density on the fluid (negative: opposes the disc's force).
+    pub fluid_force_density: f64,
+    /// Steps run.
+    pub steps: u64,
+    /// Mean superficial slip over the averaging window.
+    pub slip: f64,
+    /// Relative change of the window-mean slip between the two halves of the window (steadiness).
+    pub slip_drift: f64,
+    /// Disc velocity at the end.
+    pub disc_velocity: f64,
+    /// F/(μU) with F = |g| l², μ = ρ₀ν, U the superficial slip.
+    pub drag: f64,
+    /// S&A's F/(μU) at this solid fraction.
+    pub sangani_acrivos: f64,
+    /// drag / S&A − 1.
+    pub drag_error: f64,
+    /// Largest |total momentum − initial − accumulated applied impulse| over the run, relative to the
+    /// accumulated |F_a| t.
+    pub momentum_error: f64,
+    /// Slip Reynolds number U·2a/ν.
+    pub reynolds: f64,
+    /// Terminal disc velocity in physical units.
+    pub disc_velocity_physical: f64,
+    /// (step, disc velocity, superficial slip, total momentum x, accumulated applied impulse x).
+    pub records: Vec<[f64; 5]>,
+}
+
+/// The run: the coupled world and what is accumulated step by step.
+#[derive(Serialize, Deserialize)]
+pub struct TerminalState {
+    world: CoupledWorld,
+    cell: usize,
+    radius: f64,
+    force: f64,
+    g: f64,
+    steps: u64,
+    p0: f64,
+    impulse: f64,
+    momentum_error: f64,
+    record_every: u64,
+    window_start: u64,
+    records: Vec<[f64; 5]>,
+    window: Vec<f64>,
+    done: u64,
+}
+
+impl Persist for TerminalState {}
+
+/// Σ_n (1 − B_n): the weight of the fluid's body force over the nodes (Guo forcing scaled by 1 − B).
+fn fluid_weight(eps: &[f64], tau: f64) -> f64 {
+    eps.iter()
+        .map(|&e| 1.0 - weighting(Weighting::NobleTorczynski, e, tau))
+        .sum()
+}
+
+/// Fluid + grain momentum along x.
+fn total_momentum(w: &CoupledWorld) -> f64 {
+    w.fluid.momentum()[0] + w.dem.particles[0].mass * w.dem.particles[0].velocity[0]
+}
+
+fn start(case: &Case<TerminalVelocity>, exec: &Exec) -> Result<TerminalState> {
+    let t = &case.scene.terminal_velocity;
+    let u = &case.setup.units;
+    let n = u.length_to_lattice(t.cell).round() as usize;
+    let l = n as f64;
+    let radius = l * (t.solid_fraction / std::f64::consts::PI).sqrt();
+    let tau = u.tau;
+    let force = u.force_to_lattice(t.applied_force);
+    let steps = u.time_to_steps(t.duration).round().max(1.0) as u64;
+    let wf = Weighting::NobleTorczynski;
+    // The disc in lattice coordinates (the DEM runs in lattice units through LatticeMap::identity, the physical
+    // inputs having been converted above by LatticeUnits).
+    let center = [0.5 * l - 0.25, 0.5 * l + 0.15];
+    let density = t.grain_density / case.scene.fluid.density; // areal density relative to ρ₀ (lattice mass / node)
+    let disc = Particle::disc(center, radius, density);
+    let mass = disc.mass;
+    // No contacts exist; the stiffness only enters the DEM's critical-step check, kept far above Δt = 1.
+    let model = ContactModel {
+        normal_stiffness: 1e-6 * mass,
+        shear_stiffness: 1e-6 * mass,
+        friction: 0.0,
+        restitution: 1.0,
+        no_tension: true,
+    };
+    // Body-force density balancing the applied force at the initial coverage.
+    let body = CoupledBody {
+        center,
+        velocity: [0.0; 2],
+        spin: 0.0,
+        shape: BodyShape::Disc { radius },
+    };
+    let mut probe = FluidLattice::<f64>::new(
+        n,
+        n,
+        Boundaries::periodic(),
+        FluidParams {
+            tau,
+            force: [0.0; 2],
+        },
+    )?;
+    probe.cover_with_bodies(&[body], wf);
+    let g = -force / fluid_weight(&probe.solid_fraction_map(), tau);
+    let mut fluid = FluidLattice::<f64>::new(
+        n,
+        n,
+        Boundaries::periodic(),
+        FluidParams {
+            tau,
+            force: [g, 0.0],
+        },
+    )?;
+    exec.apply(&mut fluid);
+    fluid.set_solid_operator(t.solid_operator);
+    let mut dem = DemWorld::new(vec![disc], model, 1.0)?;
+    dem.local_damping = 0.0; // local damping is an external momentum sink (it removes momentum from the system: Cundall 1987)
+    let mut world = CoupledWorld::new(fluid, dem, LatticeMap::identity(), 1.0, wf, 1)?;
+    world.applied[0] = ([force, 0.0], 0.0);
+    let p0 = total_momentum(&world);
+    Ok(TerminalState {
+        world,
+        cell: n,
+        radius,
+        force,
+        g,
+        steps,
+        p0,
+        impulse: 0.0,
+        momentum_error: 0.0,
+        record_every: (steps / 400).max(1),
+        window_start: steps - ((steps as f64 * t.average_fraction.unwrap_or(0.2)) as u64).max(2),
+        records: Vec::new(),
+        window: Vec::new(),
+        done: 0,
+    })
+}
+
+impl TerminalState {
+    /// Up to 500 steps, accumulating the impulse, the momentum error, the records and the averaging window.
+    fn advance(&mut self, case: &Case<TerminalVelocity>) {
+        let tau = case.setup.units.tau;
+        let l = self.cell as f64;
+        let (force, g) = (self.force, self.g);
+        let end = ((self.done / 500 + 1) * 500).min(self.steps);
+        let world = &mut self.world;
+        for s in self.done + 1..=end {
+            let (p0, window_start, record_every) = (self.p0, self.window_start, self.record_every);
+            let impulse = &mut self.impulse;
+            let momentum_error = &mut self.momentum_error;
+            let (records, window) = (&mut self.records, &mut self.window);
+            world.step();
+            let eps = world.fluid.solid_fraction_map();
+            *impulse += force + g * fluid_weight(&eps, tau);
+            let p = total_momentum(world);
+            *momentum_error = momentum_error.max((p - p0 - *impulse).abs());
+            let in_window = s > window_start;
+            if s.is_multiple_of(record_every) || in_window {
+                let v = world.dem.particles[0].velocity[0];
+                let (_, vel) = world.fluid.moments();
+                let slip: f64 = eps
+                    .iter()
+                    .zip(&vel)
+                    .map(|(e, u)| (1.0 - e) * (u[0] - v))
+                    .sum::<f64>()
+                    / (l * l);
+                if in_window {
+                    window.push(-slip);
+                }
+                if s.is_multiple_of(record_every) {
+                    records.push([s as f64, v, -slip, p, *impulse]);
+                }
+            }
+        }
+        self.done = end;
+    }
+
+    fn outcome(&self, case: &Case<TerminalVelocity>) -> TerminalOutcome {
+        let t = &case.scene.terminal_velocity;
+        let nu = case.setup.units.lattice_viscosity;
+        let (n, radius, force, g, steps) = (self.cell, self.radius, self.force, self.g, self.steps);
+        let l = n as f64;
+        let (window, momentum_error, world) = (&self.window, self.momentum_error, &self.world);
+        let records = self.records.clone();
+        let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len().max(1) as f64;
+        let slip = mean(window);
+        let half = window.len() / 2;
+        let slip_drift = (mean(&window[half..]) - mean(&window[..half])) / slip;
+        let drag = g.abs() * l * l / (nu * slip);
+        // validate() keeps the solid fraction inside the S&A table.
+        let sa = sangani_acrivos_drag(t.solid_fraction).unwrap_or(f64::NAN);
+        let v_end = world.dem.particles[0].velocity[0];
+        TerminalOutcome {
+            cell: n,
+            radius,
+            solid_fraction: std::f64::consts::PI * radius * radius / (l * l),
+            applied_force: force,
+            fluid_force_density: g,
+            steps,
+            slip,
+            slip_drift,
+            disc_velocity: v_end,
+            drag,
+            sangani_acrivos: sa,
+            drag_error: drag / sa - 1.0,
+            momentum_error: momentum_error / (force * steps as f64),
+            reynolds: slip * 2.0 * radius / nu,
+            disc_velocity_physical: case.setup.units.velocity_to_physical(v_end),
+            records,
+        }
+    }
+}
+
+/// Growth factor per step of the grain/interior-fluid mode of a free grain under Ω₃ in the explicit coupled
+/// step, for interior (fully covered) fluid mass `interior_mass` and grain mass `grain_mass`.
+///
+/// With B = 1, Ω₃ turns the interior momentum j into −j + 2M V (moving-wall bounce-back of every population)
+/// and hands the grain 2(j − M V); the grain then moves by that over m. The linear map (j, V) →
+/// (−j + 2MV, V + 2(j − MV)/m) has eigenvalues 1 (common motion) and −(1 + 2M/m), unstable for any M > 0.
+/// Ω₁ sets j to M V and hands over j − MV: eigenvalues 1 and −M/m, stable while the grain outweighs the fluid
+/// it covers.
+pub fn omega3_free_grain_growth(interior_mass: f64, grain_mass: f64) -> f64 {
+    -(1.0 + 2.0 * interior_mass / grain_mass)
+}
+
+/// Run a terminal-velocity case in memory to its end.
+pub fn simulate(case: &Case<TerminalVelocity>) -> Result<TerminalOutcome> {
+    let (state, _) = run_in_memory(case, &RunOptions::default())?;
+    Ok(state.outcome(case))
+}
+
+const SERIES: [&str; 5] = [
+    "step",
+    "disc_velocity",
+    "superficial_slip",
+    "total_momentum_x",
+    "applied_impulse_x",
+];
+
+/// The terminal-velocity kind.
+pub struct TerminalVelocity;
+
+impl Kind for TerminalVelocity {
+    const NAME: &'static str = "terminal_velocity";
+    type Scene = TerminalVelocityScene;
+    type Setup = UnitsSetup;
+    type State = TerminalState;
+
+    fn validate(scene: &TerminalVelocityScene) -> Result<()> {
+        scene.scene.require_f64()?;
+        let u = scene.fluid.lattice_units()?;
+
+        let t = &scene.terminal_velocity;
+        positive("terminal_velocity.cell", t.cell, "box side l")?;
+        positive(
+            "terminal_velocity.grain_density",
+            t.grain_density,
+            "e.g. 2.65 g/cm^3",
+        )?;
+        positive(
+            "terminal_velocity.applied_force",
+            t.applied_force,
+            "force per unit thickness along x",
+        )?;
+        positive("terminal_velocity.duration", t.duration, "model time")?;
+        if !(t.solid_fraction > 0.0 && t.solid_fraction < 0.6) {
+            return Err(LbdemError::field(
+                "terminal_velocity.solid_fraction",
+                t.solid_fraction,
+                "must lie in (0, 0.6): the disc must fit its periodic box with a resolved gap",
+                "the S&A table covers 0.05 ... 0.75; 0.2 is a good test",
+            ));
+        }
+        if u.length_to_lattice(t.cell) < 16.0 {
+            return Err(LbdemError::field(
+                "terminal_velocity.cell",
+                t.cell,
+                "is fewer than 16 lattice spacings",
+                "refine fluid.spacing or enlarge the box",
+            ));
+        }
+        if t.solid_operator == SolidOperator::MovingWallBounceBack {
+            return Err(LbdemError::field(
+                "terminal_velocity.solid_operator",
+                "moving_wall",
+                "Omega_3 is unstable for a free grain in the explicit coupled step: the fluid trapped at fully \
+                 covered nodes is bounced back every step and hands the grain 2 rho (u - V) per node, so the \
+                 grain/interior-fluid mode grows by a factor -(1 + 2 M_int/m) per step (M_int the fluid mass \
+                 inside the grain, m its mass) for any density ratio",
+                "use solid_operator = \"bounce_back\" (Omega_1, stable for grains denser than about the fluid) \
+                 or \"superposition\" (Omega_2)",
+            ));
+        }
+        if let Some(f) = t.average_fraction {
+            if !(f > 0.0 && f <= 0.5) {
+                return Err(LbdemError::field(
+                    "terminal_velocity.average_fraction",
+                    f,
+                    "must lie in (0, 0.5]",
+                    "e.g. 0.2",
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    fn setup(scene: &TerminalVelocityScene) -> Result<UnitsSetup> {
+        UnitsSetup::new(&scene.fluid)
+    }
+
+    fn describe(case: &Case<Self>) -> String {
+        let labels = case.scene.scene.units.labels();
+        case.setup.describe(labels)
+            + &{
+                let t = &case.scene.terminal_velocity;
+                let u = &case.setup.units;
+                let mut s = String::new();
+                let n = u.length_to_lattice(t.cell).round();
+                s += &format!(
+                "  box {n} x {n} nodes (periodic), disc radius {:.3} nodes, applied force {:.4e} (lattice), {} steps\n",
+                n * (t.solid_fraction / std::f64::consts::PI).sqrt(),
+                u.force_to_lattice(t.applied_force),
+                u.time_to_steps(t.duration).round()
+            );
+                s
+            }
+    }
+
+    fn warnings(case: &Case<Self>) -> Vec<String> {
+        case.setup.warnings.clone()
+    }
+
+    fn units(scene: &TerminalVelocityScene) -> UnitLabels {
+        scene.scene.units.labels()
+    }
+
+    fn checkpoint_interval(scene: &TerminalVelocityScene) -> CheckpointInterval {
+        scene.run.checkpoint_interval
+    }
+
+    fn start(case: &Case<Self>, exec: &Exec) -> Result<TerminalState> {
+        start(case, exec)
+    }
+
+    fn resume(_case: &Case<Self>, state: &mut TerminalState, exec: &Exec) -> Result<()> {
+        exec.apply(&mut state.world.fluid);
+        Ok(())
+    }
+
+    fn steps_done(state: &TerminalState) -> u64 {
+        state.done
+    }
+
+    fn total_steps(_case: &Case<Self>, state: &TerminalState) -> Option<u64> {
+        Some(state.steps)
+    }
+
+    fn finished(_case: &Case<Self>, state: &TerminalState) -> bool {
+        state.done >= state.steps
+    }
+
+    fn advance(case: &Case<Self>, state: &mut TerminalState, _dir: Option<&Path>) -> Result<()> {
+        state.advance(case);
+        Ok(())
+    }
+
+    fn health(_case: &Case<Self>, state: &TerminalState) -> Result<()> {
+        fluid_health(&state.world.fluid, "lower terminal_velocity.applied_force")?;
+        dem_health(&state.world.dem)
+    }
+
+    fn write_outputs(
+        _case: &Case<Self>,
+        state: &TerminalState,
+        dir: &Path,
+        stage: OutputStage,
+    ) -> Result<()> {
+        if stage == OutputStage::Checkpoint {
+            return Ok(());
+        }
+        let series = csv(&SERIES, state.records.iter().map(|r| r.to_vec()));
+        write_atomic(&dir.join("series.csv"), series.as_bytes())
+    }
+
+    fn results(case: &Case<Self>, state: &TerminalState) -> Result<serde_json::Value> {
+        let mut o = state.outcome(case);
+        // The series is in series.csv.
+        o.records.clear();
+        Ok(serde_json::to_value(&o).unwrap_or_default())
+    }
+}

@@ -1,0 +1,98 @@
+//! Outputs: the run directory, atomic writes, CSV tables, VTK files, PNG plots and the one summary schema.
+//!
+//! Every file is written to a temporary name in the same directory and renamed, so nothing already written is
+//! ever truncated or half-written. A run directory holds `scene.toml` (the scene text the run started from,
+//! written by [`start_run_dir`]), `checkpoint.bin` (see `crate::run::checkpoint`), the kind's outputs, and
+//! `summary.json` ([`summary`]) once finished.
+use std::path::{Path, PathBuf};
+
+use crate::error::{LbdemError, Result};
+
+pub mod plot;
+pub mod summary;
+pub mod vtk;
+
+/// Name of the checkpoint inside a run directory.
+pub const CHECKPOINT_FILE: &str = "checkpoint.bin";
+/// Name of the state written when a run diverges (for inspection; never resumed from).
+pub const DIVERGED_FILE: &str = "diverged_state.bin";
+/// Name of the scene copy a run keeps in its directory (what `lbdem resume DIR` reads).
+pub const SCENE_COPY: &str = "scene.toml";
+/// Name of the summary a finished run writes last.
+pub const SUMMARY_FILE: &str = "summary.json";
+
+/// Write `bytes` to `path` atomically (temporary file + rename).
+pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
+    let tmp: PathBuf = {
+        let mut name = path
+            .file_name()
+            .map(|n| n.to_os_string())
+            .unwrap_or_default();
+        name.push(".tmp");
+        path.with_file_name(name)
+    };
+    let err = |e| LbdemError::Write {
+        path: path.display().to_string(),
+        source: e,
+    };
+    std::fs::write(&tmp, bytes).map_err(err)?;
+    std::fs::rename(&tmp, path).map_err(err)
+}
+
+/// Prepare an output directory: create it, and refuse one that holds a previous run (finished:
+/// `summary.json`; interrupted: `checkpoint.bin`) unless `overwrite`.
+pub fn prepare_dir(dir: &Path, overwrite: bool) -> Result<()> {
+    if dir.join(SUMMARY_FILE).exists() && !overwrite {
+        return Err(LbdemError::OutputExists(dir.display().to_string()));
+    }
+    if dir.join(CHECKPOINT_FILE).exists() && !overwrite {
+        return Err(LbdemError::InterruptedRunExists(dir.display().to_string()));
+    }
+    std::fs::create_dir_all(dir).map_err(|e| LbdemError::Write {
+        path: dir.display().to_string(),
+        source: e,
+    })
+}
+
+/// Prepare the directory of a new run: refuse one holding a previous run (finished or interrupted) unless
+/// `overwrite`, remove a previous run's checkpoints and summary when overwriting, and save the scene text as
+/// `DIR/scene.toml` (what `lbdem resume DIR` reads).
+pub fn start_run_dir(dir: &Path, scene_text: &str, overwrite: bool) -> Result<()> {
+    prepare_dir(dir, overwrite)?;
+    for stale in [CHECKPOINT_FILE, DIVERGED_FILE, SUMMARY_FILE] {
+        let p = dir.join(stale);
+        if p.exists() {
+            std::fs::remove_file(&p).map_err(|e| LbdemError::Write {
+                path: p.display().to_string(),
+                source: e,
+            })?;
+        }
+    }
+    write_atomic(&dir.join(SCENE_COPY), scene_text.as_bytes())
+}
+
+/// The scene text saved in a run directory.
+pub fn read_scene_copy(dir: &Path) -> Result<String> {
+    let p = dir.join(SCENE_COPY);
+    std::fs::read_to_string(&p).map_err(|e| LbdemError::Checkpoint {
+        path: dir.join(CHECKPOINT_FILE).display().to_string(),
+        problem: format!(
+            "cannot be resumed: the scene copy {} cannot be read ({e})",
+            p.display()
+        ),
+        hint: "a resumable run keeps scene.toml next to checkpoint.bin; restore it unchanged"
+            .into(),
+    })
+}
+
+/// Render rows as CSV with a header line.
+pub fn csv(header: &[&str], rows: impl IntoIterator<Item = Vec<f64>>) -> String {
+    let mut s = header.join(",");
+    s.push('\n');
+    for row in rows {
+        let cells: Vec<String> = row.iter().map(|v| format!("{v:.10e}")).collect();
+        s += &cells.join(",");
+        s.push('\n');
+    }
+    s
+}

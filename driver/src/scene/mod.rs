@@ -1,0 +1,235 @@
+//! Scene files: TOML in physical units, one `[scene]` header and sections. This module holds the section types
+//! and range checks shared by several kinds (`[scene]`, `[fluid]` (in [`crate::units`]), `[run]`, `[packing]`,
+//! `[solid]`); each kind's own sections live in its folder under `crate::kinds`. Parsing rejects unknown keys,
+//! missing fields and wrong types (serde with `deny_unknown_fields`); range checks name the field and the fix.
+//!
+//! Example (`scenes/poiseuille.toml`):
+//! ```toml
+//! [scene]
+//! kind = "channel"
+//! units = "cgs"
+//! precision = "f64"
+//! [fluid]
+//! density = 1.0       # g/cm³
+//! viscosity = 0.1     # kinematic, cm²/s
+//! spacing = 0.011     # lattice spacing h, cm
+//! tau = 0.875         # or `timestep` (s): give exactly one
+//! [channel]
+//! length = 0.55       # cm, along x
+//! width = 0.22        # cm, walls at y = 0 and y = width
+//! drive = "pressure"  # Zou–He inlet/outlet; or "body_force" (periodic along x)
+//! pressure_drop = 0.5 # dyne/cm² over the length
+//! [run]
+//! steps = 20000
+//! ```
+use serde::{Deserialize, Serialize};
+
+use crate::error::{LbdemError, Result};
+use crate::run::interval::CheckpointInterval;
+
+pub mod solid;
+
+pub use crate::units::{FluidSection, UnitLabels, UnitSystem};
+
+/// Floating-point precision of the kernels.
+#[derive(Clone, Copy, Debug, Deserialize, Serialize, PartialEq, Eq, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum Precision {
+    /// Single precision.
+    F32,
+    /// Double precision.
+    #[default]
+    F64,
+}
+
+/// `[scene]`: what is simulated, in which units and precision.
+#[derive(Clone, Debug, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct SceneHeader {
+    /// What is simulated: the name of a kind in the registry (`crate::kinds::REGISTRY`).
+    pub kind: String,
+    /// Unit system of every value in the file.
+    pub units: UnitSystem,
+    /// Kernel precision (default f64).
+    #[serde(default)]
+    pub precision: Precision,
+    /// Optional free-text name.
+    #[serde(default)]
+    pub name: Option<String>,
+}
+
+impl SceneHeader {
+    /// Refuse f32 for a kind implemented in f64 only.
+    pub fn require_f64(&self) -> Result<()> {
+        if self.precision == Precision::F32 {
+            return Err(LbdemError::field(
+                "scene.precision",
+                "f32",
+                &format!("kind = \"{}\" is implemented in f64 only", self.kind),
+                "use precision = \"f64\" (channel, cylinder_array, porous_flow and dry run in f32 too)",
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// `[run]`
+#[derive(Clone, Debug, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct RunSection {
+    /// Number of lattice steps. Give this or `duration`.
+    #[serde(default)]
+    pub steps: Option<u64>,
+    /// Model time to simulate. Give this or `steps`.
+    #[serde(default)]
+    pub duration: Option<f64>,
+    /// Stop early once the relative change of the flux over one check interval falls below this.
+    #[serde(default)]
+    pub steady_tolerance: Option<f64>,
+    /// Steps between health and steadiness checks (default 200).
+    #[serde(default)]
+    pub check_interval: Option<u64>,
+    /// Accept an expected Mach number above the refusal limit (0.35); the run is still warned about.
+    #[serde(default)]
+    pub allow_high_mach: bool,
+    /// How often to write `DIR/checkpoint.bin` (default every 10 min of wall-clock time).
+    #[serde(default)]
+    pub checkpoint_interval: CheckpointInterval,
+}
+
+impl RunSection {
+    /// Range checks of `[run]`.
+    pub fn validate(&self) -> Result<()> {
+        match (self.steps, self.duration) {
+            (Some(_), Some(_)) => {
+                return Err(LbdemError::field(
+                    "run.steps",
+                    "given together with run.duration",
+                    "only one of run.steps and run.duration may be given",
+                    "remove one of them",
+                ))
+            }
+            (None, None) => {
+                return Err(LbdemError::field(
+                    "run.steps",
+                    "missing",
+                    "neither run.steps nor run.duration is given",
+                    "add run.steps (number of lattice steps) or run.duration (model time)",
+                ))
+            }
+            (Some(0), None) => {
+                return Err(LbdemError::field(
+                    "run.steps",
+                    0,
+                    "must be at least 1",
+                    "give a positive step count",
+                ))
+            }
+            (None, Some(d)) => positive("run.duration", d, "give the model time to simulate")?,
+            _ => {}
+        }
+        if let Some(tol) = self.steady_tolerance {
+            positive("run.steady_tolerance", tol, "e.g. 1e-9")?;
+        }
+        if self.check_interval == Some(0) {
+            return Err(LbdemError::field(
+                "run.check_interval",
+                0,
+                "must be at least 1",
+                "e.g. 200",
+            ));
+        }
+        Ok(())
+    }
+
+    /// Steps to run (an upper bound when a steady tolerance is set), from `steps` or `duration` / Δt.
+    pub fn step_count(&self, timestep: f64) -> u64 {
+        match (self.steps, self.duration) {
+            (Some(s), _) => s,
+            (None, Some(d)) => (d / timestep).ceil().max(1.0) as u64,
+            _ => 1,
+        }
+    }
+}
+
+/// `[run]` of the kinds whose length is set by their own sections: only the checkpoint interval.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CheckpointSection {
+    /// How often to write `DIR/checkpoint.bin` (default every 10 min of wall-clock time).
+    #[serde(default)]
+    pub checkpoint_interval: CheckpointInterval,
+}
+
+pub(crate) use crate::error::positive;
+
+/// The derived set-up of a scene whose lattice is sized by the kind at start: the lattice units and the
+/// warnings about them.
+#[derive(Clone, Debug, Serialize)]
+pub struct UnitsSetup {
+    /// The conversion between physical and lattice units.
+    pub units: crate::units::LatticeUnits,
+    /// Warnings about the relaxation time.
+    pub warnings: Vec<String>,
+}
+
+impl UnitsSetup {
+    /// Validate `[fluid]` and derive its units, with the relaxation-time warnings.
+    pub fn new(fluid: &FluidSection) -> Result<Self> {
+        let units = fluid.lattice_units()?;
+        let mut w = crate::units::Warnings::default();
+        crate::units::check_tau(&units, &mut w);
+        Ok(Self {
+            units,
+            warnings: w.0,
+        })
+    }
+
+    /// The units' derived figures, labelled.
+    pub fn describe(&self, labels: UnitLabels) -> String {
+        self.units
+            .describe(labels.length, labels.time, labels.pressure)
+    }
+}
+
+/// The number of lattice spacings in `length` when it is a positive whole number of them (within 1 %).
+pub(crate) fn whole_spacings(field: &str, length: f64, h: f64) -> Result<usize> {
+    let n = (length / h).round();
+    if !(length.is_finite() && length > 0.0) || n < 1.0 || (n * h - length).abs() > 0.01 * h {
+        return Err(LbdemError::field(
+            field,
+            length,
+            &format!(
+                "is not a positive whole number of lattice spacings (length/h = {:.4})",
+                length / h
+            ),
+            &format!(
+                "use a multiple of fluid.spacing = {h}, e.g. {}",
+                n.max(1.0) * h
+            ),
+        ));
+    }
+    Ok(n as usize)
+}
+
+/// Read a scene file; the error names the path.
+pub fn read_scene_text(path: &std::path::Path) -> Result<String> {
+    std::fs::read_to_string(path).map_err(|e| LbdemError::ReadScene {
+        path: path.display().to_string(),
+        source: e,
+    })
+}
+
+/// The `[scene] kind` of a scene's TOML text as `K` (a kind enum, or `String`); `None` if the header does not
+/// parse as `K` (the scene's own parser then reports the problem).
+pub fn peek_kind<K: serde::de::DeserializeOwned>(text: &str) -> Option<K> {
+    #[derive(Deserialize)]
+    struct Header<K> {
+        scene: KindField<K>,
+    }
+    #[derive(Deserialize)]
+    struct KindField<K> {
+        kind: K,
+    }
+    toml::from_str::<Header<K>>(text).ok().map(|h| h.scene.kind)
+}
