@@ -1,7 +1,7 @@
 //! Coupled LB–DEM step at the fracture test's size: [`CoupledWorld::step`] (grains → PSM coverage → fluid step →
 //! force/torque → DEM) on a 1000 × 500 lattice (500 000 nodes) with ~1000 bonded ellipse grains (aspect 0.5,
 //! packed by `generate_packing`, see `src/coupled_scene.rs`), fluid radius 0.7, solid operator Ω₁ₗ
-//! (`LinearizedBounceBack`, the fracture scenes' default), a small pressure drop west → east, f64 and f32 fluid
+//! (`LinearizedNonEquilibriumBounceBack`, the fracture scenes' default), a small pressure drop west → east, f64 and f32 fluid
 //! (the DEM is f64), 1 and 2 threads.
 //!
 //! Prints, per case, the median time per step over the criterion samples, the MLUPS-equivalent (lattice nodes ×

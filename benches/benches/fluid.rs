@@ -8,8 +8,9 @@
 //! * `psm`: the same with ~30 % of the area covered by a square grid of discs (Noble–Torczynski weighting),
 //!   1024², f32 and f64, 1 and 2 threads.
 //! * `trt`, `psm-trt`: the `bgk` and `psm` cases with the two-relaxation-time collision (Λ = 3/16), same
-//!   sizes, run in the same process right after their BGK twins; the table ends with the time of a TRT node
-//!   over a BGK node for every pair measured (issue 11 target: ≤ 1.15).
+//!   sizes, run in the same process right after their BGK twins; `psm-lambda`: the `psm` case with TRT and the
+//!   τ-independent solid operator ΩΛ (B = ε). The table ends with the time of a TRT node over a BGK node for
+//!   every pair measured (issue 11 target: ≤ 1.15).
 //!
 //! Both streaming schemes read 9 and write 9 populations per node update: 144 bytes per update in f64, 72 in
 //! f32, counted as STREAM counts (no write-allocate), so the MLUPS ceiling is bandwidth / 144 B (f64) or / 72 B
@@ -26,7 +27,7 @@
 //! 2-thread figures (triad and lattice alike) noisy, so repeat and compare runs with a low load.
 //!
 //! The workspace builds for the baseline x86-64 target (SSE2), and the bulk pass is also compiled for AVX2 and
-//! AVX-512 and picked at run time (`lbdem::exec`); results are bitwise identical at every level and with either
+//! AVX-512 and picked at run time (`lbdem::engine::exec`); results are bitwise identical at every level and with either
 //! scheme. Every case runs in place (AA) at the widest level the CPU has; the 2048² BGK cases also run with the
 //! two-lattice scheme and at the baseline level, and the PSM cases with the two-lattice scheme, so the table
 //! shows what each gains.
@@ -38,7 +39,7 @@ use criterion::{BenchmarkId, Criterion, Throughput};
 use lbdem::engine::exec::SimdLevel;
 use lbdem::engine::lattice::{FluidDisc, FluidLattice, Streaming};
 use lbdem_kernels::fluid::boundary::Boundaries;
-use lbdem_kernels::fluid::collide::{Collision, Trt, Weighting};
+use lbdem_kernels::fluid::collide::{Collision, SolidOperator, Trt, Weighting};
 use lbdem_kernels::fluid::step::FluidParams;
 use lbdem_kernels::Real;
 use rayon::prelude::*;
@@ -229,11 +230,14 @@ fn bench_lattice<T: Real>(c: &mut Criterion, kind: &str, sizes: &[usize], varian
                 let mut l = periodic_lattice::<T>(n);
                 l.set_simd(level).expect("level available");
                 l.set_streaming(streaming);
-                if kind.ends_with("trt") {
+                if kind.ends_with("trt") || kind == "psm-lambda" {
                     l.set_collision(Collision::Trt(Trt::default()))
                         .expect("valid TRT rates");
                 }
-                if kind.starts_with("psm") {
+                if kind == "psm-lambda" {
+                    l.set_solid_operator(SolidOperator::LambdaConsistent);
+                    l.cover_with_discs(&disc_grid(n), Weighting::SolidFraction);
+                } else if kind.starts_with("psm") {
                     l.cover_with_discs(&disc_grid(n), Weighting::NobleTorczynski);
                 }
                 // First touch of the buffer(s) by the pool that will run the steps.
@@ -289,7 +293,7 @@ fn print_summary() {
     println!();
     println!("=== D2Q9 update (MLUPS: median and best of {SAMPLES} samples) ===");
     println!(
-        "{:<6} {:<4} {:>6} {:>7} {:>9} {:>11} {:>10} {:>10} {:>10} {:>7}",
+        "{:<10} {:<4} {:>6} {:>7} {:>9} {:>11} {:>10} {:>10} {:>10} {:>7}",
         "case", "prec", "size", "threads", "simd", "streaming", "MLUPS", "best", "ceiling", "ratio"
     );
     let mut variants = Vec::new();
@@ -300,7 +304,7 @@ fn print_summary() {
             }
         }
     }
-    for kind in ["bgk", "trt", "psm", "psm-trt"] {
+    for kind in ["bgk", "trt", "psm", "psm-trt", "psm-lambda"] {
         for prec in ["f64", "f32"] {
             for n in [256, 1024, 2048] {
                 for threads in THREADS {
@@ -324,7 +328,7 @@ fn print_summary() {
                             None => ("         -".to_string(), "      -".to_string()),
                         };
                         println!(
-                        "{kind:<6} {prec:<4} {:>6} {threads:>7} {:>9} {:>11} {mlups:>10.1} {mlups_best:>10.1} {ceiling} {ratio}",
+                        "{kind:<10} {prec:<4} {:>6} {threads:>7} {:>9} {:>11} {mlups:>10.1} {mlups_best:>10.1} {ceiling} {ratio}",
                         format!("{n}²"),
                         variant.0.name(),
                         variant.1.name()
@@ -338,7 +342,7 @@ fn print_summary() {
     println!(" ceiling; 256² (9 MB of f64 buffers) fits in the 32 MB L3, so it may exceed the memory ceiling)");
     println!();
     println!("=== TRT node / BGK node (median time per step, same size, threads and execution variant) ===");
-    for (bgk, trt) in [("bgk", "trt"), ("psm", "psm-trt")] {
+    for (bgk, trt) in [("bgk", "trt"), ("psm", "psm-trt"), ("psm", "psm-lambda")] {
         for prec in ["f64", "f32"] {
             for n in [256, 1024, 2048] {
                 for threads in THREADS {
@@ -350,7 +354,7 @@ fn print_summary() {
                             continue;
                         };
                         println!(
-                            "{trt:<8} {prec:<4} {:>6} {threads:>2}t {:>9} {:>11}: {:.3}",
+                            "{trt:<10} / {bgk:<4} {prec:<4} {:>6} {threads:>2}t {:>9} {:>11}: {:.3}",
                             format!("{n}²"),
                             variant.0.name(),
                             variant.1.name(),
@@ -388,8 +392,10 @@ fn main() {
     }
     bench_lattice::<f64>(&mut c, "psm", &[1024], widest);
     bench_lattice::<f64>(&mut c, "psm-trt", &[1024], widest);
+    bench_lattice::<f64>(&mut c, "psm-lambda", &[1024], widest);
     bench_lattice::<f32>(&mut c, "psm", &[1024], widest);
     bench_lattice::<f32>(&mut c, "psm-trt", &[1024], widest);
+    bench_lattice::<f32>(&mut c, "psm-lambda", &[1024], widest);
     bench_lattice::<f64>(&mut c, "psm", &[1024], two);
     bench_lattice::<f32>(&mut c, "psm", &[1024], two);
     c.final_summary();

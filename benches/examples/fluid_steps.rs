@@ -1,7 +1,7 @@
 //! Run a fixed number of steps of one fluid benchmark case, for profilers (`perf record`, `valgrind
 //! --tool=callgrind`, whose instruction counts are a noise-free A/B measure on a shared machine):
 //! `cargo run --release -p lbdem-benches --example fluid_steps -- <bgk|psm> <f32|f64> <n> <steps>
-//! [baseline|avx2|avx512]` (the last chooses the bulk pass's instruction set, see `lbdem::exec`; default: the
+//! [baseline|avx2|avx512]` (the last chooses the bulk pass's instruction set, see `lbdem::engine::exec`; default: the
 //! widest the CPU has). `LBDEM_BAND_ROWS=k` sets the rows per parallel band; `LBDEM_STREAMING=two-lattice`
 //! chooses the two-lattice scheme (default: in place, AA).
 //! Same lattices as the `fluid` bench: fully periodic n × n, BGK, τ = 0.8, a gentle shear wave; `psm` covers

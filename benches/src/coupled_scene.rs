@@ -1,7 +1,7 @@
 //! The coupled benchmark scene (shared by `benches/coupled.rs` and `examples/coupled_split.rs` through
 //! `#[path]`): the fracture test's size, ~1000 bonded ellipse grains (aspect 0.5, the dissertation's ch. 6.6
 //! sizes) packed by [`generate_packing`] in a 2:1 box, mapped onto an `nx × ny` lattice spanning the box, a small
-//! pressure drop west → east (Zou–He), walls north and south, the Ω₁ₗ solid operator (`LinearizedBounceBack`).
+//! pressure drop west → east (Zou–He), walls north and south, the Ω₁ₗ solid operator (`LinearizedNonEquilibriumBounceBack`).
 use lbdem::engine::coupled::{CoupledWorld, LatticeMap};
 use lbdem::engine::dem::packing::{generate_packing, PackingSpec};
 use lbdem::engine::dem::world::{BondSpec, DemWorld};
@@ -68,7 +68,7 @@ pub fn coupled_world<T: Real>(
     };
     let mut fluid = FluidLattice::<T>::new(nx, ny, bc, params).expect("benchmark lattice");
     fluid.set_streaming(streaming());
-    fluid.set_solid_operator(SolidOperator::LinearizedBounceBack);
+    fluid.set_solid_operator(SolidOperator::LinearizedNonEquilibriumBounceBack);
     // Lattice nodes span the box: node (0, 0) at (0, 0), node (nx − 1, ny − 1) at (W, H) (h from the width).
     let map = LatticeMap {
         spacing: WIDTH / (nx - 1) as f64,

@@ -62,21 +62,16 @@ fn drag_rows(cells: &[usize], fractions: &[f64], tau: f64, op: SolidOperator, as
             } else {
                 "—"
             };
-            let tol = if asserted && op == SolidOperator::BounceBack {
+            let tol = if asserted && op == SolidOperator::MovingWallBounceBack {
                 "≤ 2.5 % (asserted)".to_string()
-            } else if asserted && op == SolidOperator::LinearizedBounceBack {
+            } else if asserted && op == SolidOperator::LinearizedNonEquilibriumBounceBack {
                 format!("{class} (asserted, as Ω₁)")
             } else if asserted {
                 format!("{class} (asserted)")
             } else {
                 format!("§1.5 class {class}")
             };
-            let opname = match op {
-                SolidOperator::NonEquilibriumBounceBack => "Ω₁",
-                SolidOperator::Superposition => "Ω₂",
-                SolidOperator::BounceBack => "Ω₃",
-                SolidOperator::LinearizedBounceBack => "Ω₁ₗ",
-            };
+            let opname = op.symbol();
             match solve_array::<f64>(&case) {
                 Ok(r) => println!(
                     "| Square array, Stokes, {opname}, c = {c}, l = {l} (D = {:.1}, gap {:.1} nodes), τ = {tau} | F/(μU) = {:.2} ({} steps, drift {:.0e}/step) | S&A {:.2} | {} | {tol} |",
@@ -165,12 +160,18 @@ fn main() {
     // Fast cases: exactly those of driver/tests/porous.rs.
     let bb = SolidOperator::NonEquilibriumBounceBack;
     drag_rows(&[20, 40], &[0.2, 0.4], 0.8, bb, true);
-    drag_rows(&[20, 40], &[0.2, 0.4], 0.8, SolidOperator::BounceBack, true);
     drag_rows(
         &[20, 40],
         &[0.2, 0.4],
         0.8,
-        SolidOperator::LinearizedBounceBack,
+        SolidOperator::MovingWallBounceBack,
+        true,
+    );
+    drag_rows(
+        &[20, 40],
+        &[0.2, 0.4],
+        0.8,
+        SolidOperator::LinearizedNonEquilibriumBounceBack,
         true,
     );
     reynolds_rows(40, &[0.01, 1.0, 10.0], 0.011, 0.6);

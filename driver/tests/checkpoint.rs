@@ -84,7 +84,7 @@ fn fluid<T: Real>() -> FluidLattice<T> {
     )
     .unwrap();
     l.set_solid(|x, y| (16..19).contains(&x) && (2..5).contains(&y));
-    l.set_solid_operator(SolidOperator::BounceBack);
+    l.set_solid_operator(SolidOperator::MovingWallBounceBack);
     l.cover_with_discs(
         &[
             FluidDisc {

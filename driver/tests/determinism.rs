@@ -278,7 +278,7 @@ fn nt_operator_accumulates_mass_inside_solids_of_open_systems_and_the_other_two_
         "Ω₂: rest population {f0b} should stay near 4/9"
     );
     // Ω₃ never touches the rest population at full cover, and is bounce-back there: bounded and tight.
-    let (mc, md, f0c) = open_channel_with_disc(SolidOperator::BounceBack, 10_000);
+    let (mc, md, f0c) = open_channel_with_disc(SolidOperator::MovingWallBounceBack, 10_000);
     assert!(
         ((md - mc) / mc).abs() < 1e-6,
         "Ω₃: mass still changing {mc} -> {md}"
@@ -288,7 +288,8 @@ fn nt_operator_accumulates_mass_inside_solids_of_open_systems_and_the_other_two_
         "Ω₃: rest population {f0c} should stay near 4/9"
     );
     // Ω₁ₗ (Ω₁ without the even part of its equilibrium difference) never touches the rest population either.
-    let (me, mf, f0d) = open_channel_with_disc(SolidOperator::LinearizedBounceBack, 10_000);
+    let (me, mf, f0d) =
+        open_channel_with_disc(SolidOperator::LinearizedNonEquilibriumBounceBack, 10_000);
     assert!(
         ((mf - me) / me).abs() < 1e-6,
         "Ω₁ₗ: mass still changing {me} -> {mf}"

@@ -78,7 +78,7 @@ fn omega3_is_refused_for_a_free_grain_because_it_is_unstable() {
     // as the growth factor −(1 + 2 M_int/m) predicts (here M_int/m ≈ 0.35: ×1.7 per step).
     let mut s = scene::<TerminalVelocity>("terminal_velocity.toml");
     let t = &mut s.terminal_velocity;
-    t.solid_operator = SolidOperator::BounceBack;
+    t.solid_operator = SolidOperator::MovingWallBounceBack;
     t.duration = 0.605 / 5000.0 * 500.0;
     let bypass = Case::<TerminalVelocity> {
         setup: UnitsSetup::new(&s.fluid).unwrap(),

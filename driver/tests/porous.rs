@@ -108,7 +108,7 @@ fn moving_wall_operator_drag_matches_sangani_acrivos() {
     for c in [0.2, 0.4] {
         for l in [20usize, 40] {
             let mut case = ArrayCase::stokes(l, c, 0.8);
-            case.solid_operator = SolidOperator::BounceBack;
+            case.solid_operator = SolidOperator::MovingWallBounceBack;
             let r = solve_array::<f64>(&case).expect("healthy run");
             assert!(r.steady, "c = {c}, l = {l}: not steady");
             let err = r.drag_error.expect("tabulated c");
@@ -140,7 +140,7 @@ fn linearized_operator_drag_matches_sangani_acrivos_like_omega_1() {
     for c in [0.2, 0.4] {
         for l in [20usize, 40] {
             let mut case = ArrayCase::stokes(l, c, 0.8);
-            case.solid_operator = SolidOperator::LinearizedBounceBack;
+            case.solid_operator = SolidOperator::LinearizedNonEquilibriumBounceBack;
             let r = solve_array::<f64>(&case).expect("healthy run");
             let reference = solve_array::<f64>(&ArrayCase::stokes(l, c, 0.8)).expect("healthy run");
             assert!(r.steady, "c = {c}, l = {l}: not steady");

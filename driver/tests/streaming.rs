@@ -114,7 +114,7 @@ fn busy<T: Real>(nx: usize, ny: usize, bc: Boundaries<T>, force: [f64; 2]) -> Fl
     l.set_solid(|x, y| {
         (x == 5 && y < 4) || (x + 2 * y).is_multiple_of(17) || (x == nx - 1 && y == 3)
     });
-    l.set_solid_operator(SolidOperator::LinearizedBounceBack);
+    l.set_solid_operator(SolidOperator::LinearizedNonEquilibriumBounceBack);
     l.cover_with_discs(&discs(), Weighting::NobleTorczynski);
     l
 }

@@ -47,7 +47,7 @@ fn busy<T: Real>(bc: Boundaries<T>, force: [f64; 2], magic: f64) -> FluidLattice
         )
     });
     l.set_solid(|x, y| (x == 30 && y < 6) || (x + 3 * y).is_multiple_of(29));
-    l.set_solid_operator(SolidOperator::LinearizedBounceBack);
+    l.set_solid_operator(SolidOperator::LinearizedNonEquilibriumBounceBack);
     l.cover_with_discs(
         &[
             FluidDisc {
@@ -147,6 +147,27 @@ fn trt_is_bitwise_identical_across_simd_levels_streaming_schemes_and_threads() {
         17,
         "f32 channel",
     );
+    // ΩΛ at the covered nodes (fully covered nodes with open and closed links, obstacles next to the discs).
+    for force in [[0.0, 0.0], [2e-6, -1e-6]] {
+        assert_all_agree(
+            || {
+                let mut l = busy::<f64>(channel(), force, 3.0 / 16.0);
+                l.set_solid_operator(SolidOperator::LambdaConsistent);
+                l
+            },
+            17,
+            "f64 channel, ΩΛ",
+        );
+    }
+    assert_all_agree(
+        || {
+            let mut l = busy::<f32>(Boundaries::periodic(), [1e-6, 0.0], 0.1);
+            l.set_solid_operator(SolidOperator::LambdaConsistent);
+            l
+        },
+        17,
+        "f32 periodic, ΩΛ",
+    );
 }
 
 #[test]
@@ -176,6 +197,7 @@ fn trt_with_the_bgk_magic_parameter_stays_on_the_bgk_trajectory() {
 #[test]
 fn a_checkpoint_keeps_the_collision_operator() {
     let mut a = busy::<f64>(channel(), [1e-6, 0.0], 0.1);
+    a.set_solid_operator(SolidOperator::LambdaConsistent);
     for _ in 0..7 {
         a.step();
     }

@@ -98,7 +98,7 @@ fn scene() -> CoupledWorld {
     .unwrap();
     world
         .fluid
-        .set_solid_operator(SolidOperator::LinearizedBounceBack);
+        .set_solid_operator(SolidOperator::LinearizedNonEquilibriumBounceBack);
     world
 }
 

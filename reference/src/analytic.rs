@@ -9,6 +9,9 @@
 //!   ν = (τ − ½)/3 and Λ = (τ − ½)², the D2Q9 solution on a channel of N nodes (H = N, walls half a spacing
 //!   outside the edge nodes) is **exactly** u_LB(y) = g/(2ν) · y (H − y) + u_slip with
 //!   u_slip = (g/ν)(16Λ − 3)/24, where y is the distance from the wall (node j at y = j + ½).
+//! * Plane Couette flow between a wall at rest (y = 0) and a wall sliding at U (y = H): u(y) = U y/H.
+//! * Stokes' first problem (Stokes 1851; e.g. Batchelor 1967, §4.3): a plane wall started impulsively at
+//!   speed U under a fluid at rest drags it as u(d, t) = U erfc(d/(2√(νt))), d the distance from the wall.
 //! * Published figures: Sangani & Acrivos's drag of square cylinder arrays; Kozeny–Carman for discs.
 //! * Diffusion: the slab drained at both faces (pressure diffusion, eq. 5.12) and Terzaghi's consolidation.
 
@@ -58,6 +61,17 @@ pub fn lattice_poiseuille_velocity(g: f64, tau: f64, n: usize, j: usize) -> f64 
     poiseuille_velocity(g, nu, n as f64, y) + bounce_back_slip(g, nu, bgk_lambda(tau))
 }
 
+/// Plane Couette velocity u(y) = U y/H between a wall at rest at y = 0 and a wall sliding at `u_wall` at y = `h`.
+pub fn couette_velocity(u_wall: f64, h: f64, y: f64) -> f64 {
+    u_wall * y / h
+}
+
+/// Stokes' first problem: velocity at distance `d` from a plane wall started impulsively at speed `u_wall` a
+/// time `t` ago in a fluid of kinematic viscosity `nu` at rest, U erfc(d/(2√(νt))). `erfc` from the `libm` crate.
+pub fn stokes_first_problem(u_wall: f64, nu: f64, t: f64, d: f64) -> f64 {
+    u_wall * libm::erfc(d / (2.0 * (nu * t).sqrt()))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -77,6 +91,20 @@ mod tests {
             (poiseuille_max_velocity(g, mu, h) - poiseuille_velocity(g, mu, h, h / 2.0)).abs()
                 <= 1e-18
         );
+    }
+
+    #[test]
+    fn stokes_first_problem_limits() {
+        // u = U at the wall, U/2 at d = 2√(νt)·0.476936 (erfc⁻¹(½)), → 0 far away; erfc(1) = 0.157299...
+        let (u, nu, t) = (0.01, 0.1, 400.0);
+        assert_eq!(stokes_first_problem(u, nu, t, 0.0), u);
+        let half = 2.0 * (nu * t).sqrt() * 0.476_936_276_204_469_9;
+        assert!((stokes_first_problem(u, nu, t, half) - 0.5 * u).abs() < 1e-15);
+        let one = 2.0 * (nu * t).sqrt();
+        assert!((stokes_first_problem(u, nu, t, one) / u - 0.157_299_207_050_285_1).abs() < 1e-15);
+        // erfc(20) = 5.4e-176.
+        assert!(stokes_first_problem(u, nu, t, 20.0 * one) < 1e-177);
+        assert_eq!(couette_velocity(2.0, 4.0, 1.0), 0.5);
     }
 
     #[test]

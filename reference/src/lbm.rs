@@ -155,7 +155,16 @@ pub fn trt(f: &Populations, tau_plus: f64, magic: f64) -> Populations {
 /// Two-relaxation-time collision with Guo's source split into even and odd parts, u with the half-force
 /// shift: f_i − (f_i⁺ − e_i⁺)/τ⁺ − (f_i⁻ − e_i⁻)/τ⁻ + (1 − 1/(2τ⁺)) G_i⁺ + (1 − 1/(2τ⁻)) G_i⁻.
 pub fn trt_forced(f: &Populations, tau_plus: f64, magic: f64, force: [f64; 2]) -> Populations {
-    let tau_m = tau_minus(tau_plus, magic);
+    trt_forced_times(f, tau_plus, tau_minus(tau_plus, magic), force)
+}
+
+/// [`trt_forced`] with the two relaxation times given directly.
+pub fn trt_forced_times(
+    f: &Populations,
+    tau_plus: f64,
+    tau_m: f64,
+    force: [f64; 2],
+) -> Populations {
     let (rho, u) = macroscopic(f, force);
     let feq = equilibrium(rho, u);
     // Guo's source without its prefactor: G_i = w_i [3 (c_i − u) + 9 (c_i·u) c_i]·F.
@@ -249,10 +258,10 @@ pub enum SolidOp {
     NonEquilibriumBounceBack,
     /// Ω₂: f_i^eq(ρ,u_s) − f_i + (1 − 1/τ)(f_i − f_i^eq(ρ,u)) (Holdych's superposition).
     Superposition,
-    /// Ω₃: f_ī − f_ī^eq(ρ,u_s) + f_i^eq(ρ,u_s) − f_i (Owen et al. eq. 33).
-    BounceBack,
+    /// Ω₃: f_ī − f_ī^eq(ρ,u_s) + f_i^eq(ρ,u_s) − f_i (Owen et al. eq. 33, moving-wall bounce-back).
+    MovingWallBounceBack,
     /// Ω₁ₗ: f_ī − f_i + 3 w_i ρ c_i·(u + u_s) (Ω₁ without the even part of its equilibrium difference).
-    LinearizedBounceBack,
+    LinearizedNonEquilibriumBounceBack,
 }
 
 /// As [`psm`], with the solid operator chosen (see [`SolidOp`]).
@@ -327,8 +336,8 @@ pub fn psm_with_collision(
             let omega_s = match op {
                 SolidOp::Superposition => feq_s[i] - f[i] + post_non_equilibrium(i),
                 SolidOp::NonEquilibriumBounceBack => f[o] - feq[o] + feq_s[i] - f[i],
-                SolidOp::BounceBack => f[o] - feq_s[o] + feq_s[i] - f[i],
-                SolidOp::LinearizedBounceBack => {
+                SolidOp::MovingWallBounceBack => f[o] - feq_s[o] + feq_s[i] - f[i],
+                SolidOp::LinearizedNonEquilibriumBounceBack => {
                     let cv =
                         c(i)[0] * (u[0] + solid.velocity[0]) + c(i)[1] * (u[1] + solid.velocity[1]);
                     f[o] - f[i] + 3.0 * W[i] * rho * cv
@@ -341,6 +350,121 @@ pub fn psm_with_collision(
         exchange.push([-given_to_fluid[0], -given_to_fluid[1]]);
     }
     (out, exchange)
+}
+
+/// ΩΛ's friction constant κ (`lbdem_kernels::fluid::collide::LAMBDA_FRICTION`, restated).
+pub const LAMBDA_FRICTION: f64 = 0.95;
+
+/// The magic-parameter-consistent partially saturated collision ΩΛ of one node (see the kernels'
+/// `lambda_collide` for the derivation), written from its definition. `magic` = `None` is BGK (Λ⁻ = Λ⁺);
+/// `open[i]` tells whether the neighbour x + c_i is not fully covered (read at fully covered nodes only).
+///
+/// * Σ ε_s ≤ 0: the fluid collision.
+/// * Σ ε_s ≥ 1: for each solid s, P_i = f_ī + 6 w_i ρ c_i·u_s on open links; the other directions (the rest
+///   direction among them) get the remaining mass ρ − Σ_open P_i in proportion to f^eq(1, u_s); the node takes
+///   Σ_s (ε_s/Σε) P_s and solid s receives −(ε_s/Σε) Σ_i c_i (P_{s,i} − f_i).
+/// * otherwise, with Λ⁺ = τ − ½, Λ⁻ = τ⁻ − ½, B = ε (or ε√(Λ⁺Λ⁻)/((1 − ε) + √(Λ⁺Λ⁻)) for the NT weighting):
+///   TRT with τ⁺_loc = ½ + Λ⁺/(1 − B), τ⁻_loc = ½ + Λ⁻(1 − B) and the force F = (1 − B) F_body + Σ_s F_s,
+///   F_s = −κ Λ⁺ B (ε_s/Σε) ρ (u − u_s), u the velocity of that forced collision, u = (Σ f c + F/2)/ρ (solved:
+///   u (1 + κΛ⁺B/2) = (Σ f c + (1 − B) F_body/2)/ρ + Σ_s κΛ⁺B (ε_s/Σε) u_s/2); solid s receives −F_s.
+pub fn psm_lambda(
+    f: &Populations,
+    tau: f64,
+    magic: Option<f64>,
+    kind: Weighting,
+    force: [f64; 2],
+    solids: &[Solid],
+    open: [bool; Q],
+) -> (Populations, Vec<[f64; 2]>) {
+    let eps: f64 = solids.iter().map(|s| s.fraction).sum();
+    if eps <= 0.0 {
+        return (
+            fluid_collision(f, tau, magic, force),
+            vec![[0.0, 0.0]; solids.len()],
+        );
+    }
+    let rho = density(f);
+    if eps >= 1.0 {
+        let mut out = [0.0; Q];
+        let mut exchange = Vec::new();
+        for s in solids {
+            let share = s.fraction / eps;
+            let shape = equilibrium(1.0, s.velocity);
+            let mut p = [0.0; Q];
+            let is_open = |i: usize| i != 0 && open[i];
+            for i in (0..Q).filter(|&i| is_open(i)) {
+                let cu = c(i)[0] * s.velocity[0] + c(i)[1] * s.velocity[1];
+                p[i] = f[OPPOSITE[i]] + 6.0 * W[i] * rho * cu;
+            }
+            let reflected: f64 = (0..Q).filter(|&i| is_open(i)).map(|i| p[i]).sum();
+            let closed_weight: f64 = (0..Q).filter(|&i| !is_open(i)).map(|i| shape[i]).sum();
+            for i in (0..Q).filter(|&i| !is_open(i)) {
+                p[i] = (rho - reflected) * shape[i] / closed_weight;
+            }
+            let mut handed = [0.0; 2];
+            for i in 0..Q {
+                out[i] += share * p[i];
+                handed[0] -= share * (p[i] - f[i]) * c(i)[0];
+                handed[1] -= share * (p[i] - f[i]) * c(i)[1];
+            }
+            exchange.push(handed);
+        }
+        return (out, exchange);
+    }
+    let lambda_plus = tau - 0.5;
+    let lambda_minus = match magic {
+        None => lambda_plus,
+        Some(m) => tau_minus(tau, m) - 0.5,
+    };
+    let b = match kind {
+        Weighting::SolidFraction => eps,
+        Weighting::NobleTorczynski => {
+            let a = (lambda_plus * lambda_minus).sqrt();
+            eps * a / ((1.0 - eps) + a)
+        }
+    };
+    let beta = LAMBDA_FRICTION * lambda_plus * b;
+    let body = [(1.0 - b) * force[0], (1.0 - b) * force[1]];
+    let j = momentum(f);
+    let mut u = [0.0; 2];
+    for a in 0..2 {
+        let pull: f64 = solids
+            .iter()
+            .map(|s| beta * s.fraction / eps * s.velocity[a] / 2.0)
+            .sum();
+        u[a] = ((j[a] + body[a] / 2.0) / rho + pull) / (1.0 + beta / 2.0);
+    }
+    let mut total = body;
+    let mut exchange = Vec::new();
+    for s in solids {
+        let fs = [
+            -beta * s.fraction / eps * rho * (u[0] - s.velocity[0]),
+            -beta * s.fraction / eps * rho * (u[1] - s.velocity[1]),
+        ];
+        total[0] += fs[0];
+        total[1] += fs[1];
+        exchange.push([-fs[0], -fs[1]]);
+    }
+    let post = trt_forced_times(
+        f,
+        0.5 + lambda_plus / (1.0 - b),
+        0.5 + lambda_minus * (1.0 - b),
+        total,
+    );
+    (post, exchange)
+}
+
+/// The open links of node (x, y) for ΩΛ: `open[i]` when x + c_i is inside the lattice (wrapping across
+/// periodic sides), not an obstacle node and not fully covered (`full[node]`). Links leaving through a
+/// non-periodic side are closed.
+pub fn open_links(lat: &Lattice, sides: &Sides, full: &[bool], x: usize, y: usize) -> [bool; Q] {
+    let mut open = [false; Q];
+    for (q, o) in open.iter_mut().enumerate().skip(1) {
+        if let Some(j) = lat.destination(x, y, q, sides) {
+            *o = !lat.solid[j] && !full[j];
+        }
+    }
+    open
 }
 
 /// The sides of the rectangle.
@@ -377,8 +501,36 @@ pub enum Condition {
     Wall,
     /// Zou–He pressure: prescribed density, zero tangential velocity.
     Pressure(f64),
-    /// Zou–He velocity: prescribed velocity.
+    /// Zou–He velocity: prescribed velocity (or, where [`Profiles`] has values for the side, one per node).
     Velocity([f64; 2]),
+    /// Half-way bounce-back wall sliding along itself at this velocity: a population re-entering through it
+    /// gains 6 w_i ρ c_i·u_w (Ladd 1994), ρ the density of the node's streamed populations.
+    MovingWall([f64; 2]),
+}
+
+/// Per-node velocities of velocity sides (empty: the side's uniform velocity): node k along the side, x for
+/// south and north, y for west and east.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Profiles {
+    /// x = 0.
+    pub west: Vec<[f64; 2]>,
+    /// x = nx − 1.
+    pub east: Vec<[f64; 2]>,
+    /// y = 0.
+    pub south: Vec<[f64; 2]>,
+    /// y = ny − 1.
+    pub north: Vec<[f64; 2]>,
+}
+
+impl Profiles {
+    fn of(&self, side: Side) -> &[[f64; 2]] {
+        match side {
+            Side::West => &self.west,
+            Side::East => &self.east,
+            Side::South => &self.south,
+            Side::North => &self.north,
+        }
+    }
 }
 
 impl Condition {
@@ -535,6 +687,8 @@ pub struct Params {
     pub weighting: Weighting,
     /// Fluid collision: BGK (`None`) or TRT with this magic parameter Λ.
     pub magic: Option<f64>,
+    /// Covered nodes use ΩΛ ([`psm_lambda`]) instead of Ω₁.
+    pub lambda_consistent: bool,
 }
 
 impl Lattice {
@@ -620,6 +774,27 @@ fn zou_he_sides(lat: &Lattice, x: usize, y: usize, sides: &Sides) -> (Option<Sid
 /// diagonal interior neighbour in `before` (1 if it is an obstacle node), and u = the prescribed velocity of a
 /// velocity side, else 0.
 pub fn close_zou_he(before: &Lattice, streamed: &mut [Populations], sides: &Sides) {
+    close_zou_he_profiles(before, streamed, sides, &Profiles::default());
+}
+
+/// [`close_zou_he`] with per-node velocities for the velocity sides that have a profile.
+pub fn close_zou_he_profiles(
+    before: &Lattice,
+    streamed: &mut [Populations],
+    sides: &Sides,
+    profiles: &Profiles,
+) {
+    // The condition of `side` at node (x, y): a profile replaces a velocity side's uniform velocity.
+    let at = |side: Side, x: usize, y: usize| -> Condition {
+        let p = profiles.of(side);
+        match sides.of(side) {
+            Condition::Velocity(_) if !p.is_empty() => Condition::Velocity(match side {
+                Side::West | Side::East => p[y],
+                Side::South | Side::North => p[x],
+            }),
+            c => c,
+        }
+    };
     for y in 0..before.ny {
         for x in 0..before.nx {
             let here = before.index(x, y);
@@ -629,7 +804,7 @@ pub fn close_zou_he(before: &Lattice, streamed: &mut [Populations], sides: &Side
             let f = &mut streamed[here];
             match zou_he_sides(before, x, y, sides) {
                 (None, None) => {}
-                (Some(s), None) | (None, Some(s)) => match sides.of(s) {
+                (Some(s), None) | (None, Some(s)) => match at(s, x, y) {
                     Condition::Pressure(rho) => {
                         zou_he_pressure(f, s, rho);
                     }
@@ -639,7 +814,7 @@ pub fn close_zou_he(before: &Lattice, streamed: &mut [Populations], sides: &Side
                     _ => unreachable!("only Zou–He sides are returned"),
                 },
                 (Some(sx), Some(sy)) => {
-                    let rho = match (sides.of(sx), sides.of(sy)) {
+                    let rho = match (at(sx, x, y), at(sy, x, y)) {
                         (Condition::Pressure(a), Condition::Pressure(b)) => 0.5 * (a + b),
                         (Condition::Pressure(a), _) | (_, Condition::Pressure(a)) => a,
                         _ => {
@@ -654,7 +829,7 @@ pub fn close_zou_he(before: &Lattice, streamed: &mut [Populations], sides: &Side
                             }
                         }
                     };
-                    let u = match (sides.of(sx), sides.of(sy)) {
+                    let u = match (at(sx, x, y), at(sy, x, y)) {
                         (Condition::Velocity(u), _) | (_, Condition::Velocity(u)) => u,
                         _ => [0.0, 0.0],
                     };
@@ -679,8 +854,70 @@ pub fn step(
     params: &Params,
     covered: &[Covered],
 ) -> (Lattice, Vec<Vec<[f64; 2]>>) {
+    step_with_profiles(lat, sides, &Profiles::default(), params, covered)
+}
+
+/// Ladd's correction at moving walls: every population of the streamed state that re-entered node (x, y)
+/// through a [`Condition::MovingWall`] side gains 6 w_i ρ c_i·u_w, ρ the node's streamed density before the
+/// corrections. A population that crossed two sides takes the velocity of the side crossed along y if it is a
+/// moving wall, else that of the side crossed along x.
+pub fn correct_moving_walls(lat: &Lattice, streamed: &mut [Populations], sides: &Sides) {
+    let moving = |c: Condition| match c {
+        Condition::MovingWall(u) => Some(u),
+        _ => None,
+    };
+    for y in 0..lat.ny {
+        for x in 0..lat.nx {
+            let here = lat.index(x, y);
+            if lat.solid[here] {
+                continue;
+            }
+            let rho = density(&streamed[here]);
+            for q in 1..Q {
+                // The population now moving along c_q came from (x, y) − c_q.
+                let sx = x as i64 - C[q][0];
+                let sy = y as i64 - C[q][1];
+                let x_side = if sx < 0 {
+                    Some(Side::West)
+                } else if sx >= lat.nx as i64 {
+                    Some(Side::East)
+                } else {
+                    None
+                };
+                let y_side = if sy < 0 {
+                    Some(Side::South)
+                } else if sy >= lat.ny as i64 {
+                    Some(Side::North)
+                } else {
+                    None
+                };
+                let crossed = |s: Option<Side>| s.filter(|&s| sides.of(s) != Condition::Periodic);
+                let (x_side, y_side) = (crossed(x_side), crossed(y_side));
+                if x_side.is_none() && y_side.is_none() {
+                    continue;
+                }
+                let u = y_side
+                    .and_then(|s| moving(sides.of(s)))
+                    .or_else(|| x_side.and_then(|s| moving(sides.of(s))));
+                if let Some(u) = u {
+                    streamed[here][q] += 6.0 * W[q] * rho * (c(q)[0] * u[0] + c(q)[1] * u[1]);
+                }
+            }
+        }
+    }
+}
+
+/// [`step`] with per-node velocities on the velocity sides that have a profile.
+pub fn step_with_profiles(
+    lat: &Lattice,
+    sides: &Sides,
+    profiles: &Profiles,
+    params: &Params,
+    covered: &[Covered],
+) -> (Lattice, Vec<Vec<[f64; 2]>>) {
     let mut streamed = stream(lat, sides);
-    close_zou_he(lat, &mut streamed, sides);
+    correct_moving_walls(lat, &mut streamed, sides);
+    close_zou_he_profiles(lat, &mut streamed, sides, profiles);
     let mut next = lat.clone();
     for (n, f) in streamed.iter().enumerate() {
         next.f[n] = if lat.solid[n] {
@@ -690,9 +927,28 @@ pub fn step(
         };
     }
     let mut forces = Vec::with_capacity(covered.len());
+    let mut full = vec![false; lat.f.len()];
+    for cov in covered {
+        full[cov.node] = cov.solids.iter().map(|s| s.fraction).sum::<f64>() >= 1.0;
+    }
     for cov in covered {
         if lat.solid[cov.node] {
             forces.push(vec![[0.0, 0.0]; cov.solids.len()]);
+            continue;
+        }
+        if params.lambda_consistent {
+            let (x, y) = (cov.node % lat.nx, cov.node / lat.nx);
+            let (f, ex) = psm_lambda(
+                &streamed[cov.node],
+                params.tau,
+                params.magic,
+                params.weighting,
+                params.force,
+                &cov.solids,
+                open_links(lat, sides, &full, x, y),
+            );
+            next.f[cov.node] = f;
+            forces.push(ex);
             continue;
         }
         let (f, ex) = psm_with_collision(

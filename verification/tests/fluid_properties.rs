@@ -17,18 +17,20 @@
 //!   Whole steps are single steps, so errors do not compound.
 //! * Bitwise (`to_bits`) where the claim is exact: PSM with ε = 0 versus BGK, streaming as a permutation,
 //!   band splitting.
-use lbdem_kernels::fluid::boundary::{zou_he, zou_he_corner, Boundaries, SideCondition};
+use lbdem_kernels::fluid::boundary::{
+    zou_he, zou_he_corner, Boundaries, SideCondition, SideProfiles,
+};
 use lbdem_kernels::fluid::collide::{
-    bgk_collide, bgk_collide_forced, bgk_collide_slices, psm_collide, trt_collide,
-    trt_collide_forced, Collision, CollisionError, PsmParams, SolidOperator, SolidShare, Trt,
-    Weighting,
+    bgk_collide, bgk_collide_forced, bgk_collide_slices, fluid_collide, psm_collide,
+    psm_collide_links, psm_velocity, trt_collide, trt_collide_forced, Collision, CollisionError,
+    OpenLinks, PsmParams, SolidOperator, SolidShare, Trt, Weighting, ALL_LINKS_OPEN,
 };
 use lbdem_kernels::fluid::d2q9::{density, equilibrium, momentum, second_moment, OPPOSITE, Q};
 use lbdem_kernels::fluid::lattice::{LatticeShape, Side};
 use lbdem_kernels::fluid::step::{
     band_mut, classify_special_nodes, collide_covered_nodes, gather_node, gathered_moments,
-    nodes_in_rows, planes, planes_mut, step_band, stream_periodic, CoveredNodes, Domain,
-    FluidParams, FLUID, SOLID,
+    nodes_in_rows, open_links, planes, planes_mut, step_band, stream_periodic, CoveredNodes,
+    Domain, FluidParams, FLUID, SOLID,
 };
 use lbdem_kernels::Real;
 use lbdem_reference::analytic;
@@ -234,8 +236,8 @@ proptest! {
         let (solid, ref_op) = [
             (SolidOperator::NonEquilibriumBounceBack, reference::SolidOp::NonEquilibriumBounceBack),
             (SolidOperator::Superposition, reference::SolidOp::Superposition),
-            (SolidOperator::BounceBack, reference::SolidOp::BounceBack),
-            (SolidOperator::LinearizedBounceBack, reference::SolidOp::LinearizedBounceBack),
+            (SolidOperator::MovingWallBounceBack, reference::SolidOp::MovingWallBounceBack),
+            (SolidOperator::LinearizedNonEquilibriumBounceBack, reference::SolidOp::LinearizedNonEquilibriumBounceBack),
         ][op];
         let params = PsmParams { tau, weighting: w, force, solid, collision: Collision::Bgk };
         let mut g = f;
@@ -253,7 +255,7 @@ proptest! {
         if !forced {
             // REFERENCE.md §2.2–2.3: with Ω₁ or Ω₂ and no forcing, F_s = B_s ρ (u − u_s) for any populations;
             // Ω₃ hands over twice that; Ω₁ₗ exactly Ω₁'s.
-            let factor = if solid == SolidOperator::BounceBack { 2.0 } else { 1.0 };
+            let factor = if solid == SolidOperator::MovingWallBounceBack { 2.0 } else { 1.0 };
             let (rho, j) = (density(&f), momentum(&f));
             let eps: f64 = shares.iter().map(|s| s.fraction).sum();
             for (s, e) in shares.iter().zip(&exchange) {
@@ -364,7 +366,7 @@ fn psm_bounce_back_operator_at_full_cover_is_moving_wall_bounce_back() {
             tau: 0.7,
             weighting: Weighting::NobleTorczynski,
             force: [0.0; 2],
-            solid: SolidOperator::BounceBack,
+            solid: SolidOperator::MovingWallBounceBack,
             collision: Collision::Bgk,
         };
         psm_collide(&mut f, &params, &shares, &mut ex);
@@ -421,7 +423,7 @@ fn linearized_operator_at_full_cover_moves_with_the_solid_and_keeps_the_rest_pop
             tau: 0.7,
             weighting: Weighting::NobleTorczynski,
             force: [0.0; 2],
-            solid: SolidOperator::LinearizedBounceBack,
+            solid: SolidOperator::LinearizedNonEquilibriumBounceBack,
             collision: Collision::Bgk,
         };
         psm_collide(&mut f, &params, &shares, &mut ex);
@@ -457,6 +459,10 @@ struct Problem {
     covered: Vec<(u32, Vec<SolidShare<f64>>)>,
     /// Fluid collision: BGK (`None`) or TRT with this magic parameter Λ.
     magic: Option<f64>,
+    /// Covered nodes use ΩΛ (else Ω₁).
+    lambda: bool,
+    /// Per-node velocities of `VelocityProfile` sides.
+    profiles: reference::Profiles,
 }
 
 fn random_side(rng: &mut SplitMix) -> SideCondition<f64> {
@@ -531,6 +537,8 @@ fn random_problem(nx: usize, ny: usize, seed: u64, p_solid: f64, p_covered: f64)
         weighting,
         covered,
         magic: None,
+        lambda: false,
+        profiles: reference::Profiles::default(),
     }
 }
 
@@ -540,6 +548,9 @@ fn to_reference_condition(c: SideCondition<f64>) -> reference::Condition {
         SideCondition::Wall => reference::Condition::Wall,
         SideCondition::Pressure { density } => reference::Condition::Pressure(density),
         SideCondition::Velocity { velocity } => reference::Condition::Velocity(velocity),
+        SideCondition::MovingWall { velocity } => reference::Condition::MovingWall(velocity),
+        // The per-node values are in the problem's `profiles`.
+        SideCondition::VelocityProfile => reference::Condition::Velocity([0.0; 2]),
     }
 }
 
@@ -580,6 +591,10 @@ fn side_in<T: Real>(c: SideCondition<f64>) -> SideCondition<T> {
         SideCondition::Velocity { velocity } => SideCondition::Velocity {
             velocity: velocity.map(T::lit),
         },
+        SideCondition::MovingWall { velocity } => SideCondition::MovingWall {
+            velocity: velocity.map(T::lit),
+        },
+        SideCondition::VelocityProfile => SideCondition::VelocityProfile,
     }
 }
 
@@ -607,9 +622,22 @@ fn kernel_step<T: Real>(
         .iter()
         .map(|&s| if s { SOLID } else { FLUID })
         .collect();
+    let profile = |v: &[[f64; 2]]| -> Vec<[T; 2]> { v.iter().map(|u| u.map(T::lit)).collect() };
+    let (pw, pe, ps, pn) = (
+        profile(&p.profiles.west),
+        profile(&p.profiles.east),
+        profile(&p.profiles.south),
+        profile(&p.profiles.north),
+    );
     let domain = Domain {
         shape,
         bc,
+        profiles: SideProfiles {
+            west: &pw,
+            east: &pe,
+            south: &ps,
+            north: &pn,
+        },
         flags: &flags,
     };
     let src = to_buffer::<T>(&shape, &p.lattice.f);
@@ -625,7 +653,11 @@ fn kernel_step<T: Real>(
         tau,
         weighting: p.weighting,
         force,
-        solid: SolidOperator::NonEquilibriumBounceBack,
+        solid: if p.lambda {
+            SolidOperator::LambdaConsistent
+        } else {
+            SolidOperator::NonEquilibriumBounceBack
+        },
         collision,
     };
     // Compressed-row coverage.
@@ -639,6 +671,22 @@ fn kernel_step<T: Real>(
         }));
         offsets.push(shares.len() as u32);
     }
+    // Open links (ΩΛ): fully covered = the shares' fractions, summed in the collision's order, reach 1.
+    let mut full = vec![false; shape.nodes()];
+    for (k, &n) in nodes.iter().enumerate() {
+        let mut eps = T::zero();
+        for s in &shares[offsets[k] as usize..offsets[k + 1] as usize] {
+            eps += s.fraction;
+        }
+        full[n as usize] = eps >= T::one();
+    }
+    let links: Vec<OpenLinks> = nodes
+        .iter()
+        .map(|&n| {
+            let (x, y) = shape.coords(n as usize);
+            open_links(&shape, &bc, &flags, x, y, |j| full[j])
+        })
+        .collect();
     let mut exchange = vec![[T::nan(); 2]; shares.len()];
     let mut rows = vec![0];
     rows.extend_from_slice(cuts);
@@ -664,6 +712,7 @@ fn kernel_step<T: Real>(
                 nodes: &nodes[lo..hi],
                 offsets: &offsets[lo..=hi],
                 shares: &shares,
+                links: &links[lo..hi],
             };
             let (a, b) = (offsets[lo] as usize, offsets[hi] as usize);
             collide_covered_nodes(
@@ -690,6 +739,7 @@ fn reference_step(p: &Problem, with_coverage: bool) -> (reference::Lattice, Vec<
         force: p.force,
         weighting: to_reference_weighting(p.weighting),
         magic: p.magic,
+        lambda_consistent: p.lambda,
     };
     let covered: Vec<reference::Covered> = if with_coverage {
         p.covered
@@ -702,7 +752,13 @@ fn reference_step(p: &Problem, with_coverage: bool) -> (reference::Lattice, Vec<
     } else {
         Vec::new()
     };
-    reference::step(&p.lattice, &to_reference_sides(&p.bc), &params, &covered)
+    reference::step_with_profiles(
+        &p.lattice,
+        &to_reference_sides(&p.bc),
+        &p.profiles,
+        &params,
+        &covered,
+    )
 }
 
 /// Kernel step in precision `T` versus reference step, node by node, within `tol` relative to the reference
@@ -938,7 +994,7 @@ proptest! {
                     continue;
                 }
                 let Some(want) = expected_edge_state(&p.bc, nx, ny, x, y) else { continue };
-                let g = gather_node(&shape, &src, &p.bc, &flags, x, y);
+                let g = gather_node(&shape, &src, &p.bc, &SideProfiles::none(), &flags, x, y);
                 let (rho, j) = (density(&g), momentum(&g));
                 let tol = ROUNDOFF * scale(&g);
                 if let Some(rho0) = want.density {
@@ -1004,7 +1060,7 @@ proptest! {
         let src = to_buffer::<f64>(&shape, &p.lattice.f);
         let mut rho = vec![f64::NAN; shape.nodes()];
         let mut u = vec![[f64::NAN; 2]; shape.nodes()];
-        gathered_moments(&shape, &src, &p.bc, &flags, p.force, &mut rho, &mut u);
+        gathered_moments(&shape, &src, &p.bc, &SideProfiles::none(), &flags, p.force, &mut rho, &mut u);
         let sides = to_reference_sides(&p.bc);
         let mut streamed = reference::stream(&p.lattice, &sides);
         reference::close_zou_he(&p.lattice, &mut streamed, &sides);
@@ -1133,6 +1189,7 @@ fn body_force_poiseuille_matches_the_slip_formula() {
     let domain = Domain {
         shape,
         bc,
+        profiles: SideProfiles::none(),
         flags: &flags,
     };
     let mut special = vec![0u32; shape.nodes()];
@@ -1161,7 +1218,16 @@ fn body_force_poiseuille_matches_the_slip_formula() {
         }
         let mut rho = vec![0.0; shape.nodes()];
         let mut u = vec![[0.0; 2]; shape.nodes()];
-        gathered_moments(&shape, &a, &bc, &flags, [g, 0.0], &mut rho, &mut u);
+        gathered_moments(
+            &shape,
+            &a,
+            &bc,
+            &SideProfiles::none(),
+            &flags,
+            [g, 0.0],
+            &mut rho,
+            &mut u,
+        );
         let u_max =
             analytic::poiseuille_max_velocity(g, analytic::lattice_viscosity(tau), ny as f64);
         for (j, uj) in u.iter().enumerate() {
@@ -1262,8 +1328,8 @@ proptest! {
         let (solid, ref_op) = [
             (SolidOperator::NonEquilibriumBounceBack, reference::SolidOp::NonEquilibriumBounceBack),
             (SolidOperator::Superposition, reference::SolidOp::Superposition),
-            (SolidOperator::BounceBack, reference::SolidOp::BounceBack),
-            (SolidOperator::LinearizedBounceBack, reference::SolidOp::LinearizedBounceBack),
+            (SolidOperator::MovingWallBounceBack, reference::SolidOp::MovingWallBounceBack),
+            (SolidOperator::LinearizedNonEquilibriumBounceBack, reference::SolidOp::LinearizedNonEquilibriumBounceBack),
         ][op];
         let params = PsmParams { tau, weighting: w, force, solid, collision: trt(magic) };
         let mut g = f;
@@ -1401,6 +1467,7 @@ fn trt_poiseuille_error_does_not_depend_on_tau() {
     let domain = Domain {
         shape,
         bc,
+        profiles: SideProfiles::none(),
         flags: &flags,
     };
     let mut special = vec![0u32; shape.nodes()];
@@ -1434,7 +1501,16 @@ fn trt_poiseuille_error_does_not_depend_on_tau() {
             }
             let mut rho = vec![0.0; shape.nodes()];
             let mut u = vec![[0.0; 2]; shape.nodes()];
-            gathered_moments(&shape, &a, &bc, &flags, [g, 0.0], &mut rho, &mut u);
+            gathered_moments(
+                &shape,
+                &a,
+                &bc,
+                &SideProfiles::none(),
+                &flags,
+                [g, 0.0],
+                &mut rho,
+                &mut u,
+            );
             let u_max = analytic::poiseuille_max_velocity(g, nu, ny as f64);
             let slip = analytic::bounce_back_slip(g, nu, magic);
             let mut worst = 0.0f64;
@@ -1468,4 +1544,329 @@ fn trt_poiseuille_error_does_not_depend_on_tau() {
             assert!((hi - 1.0 / 192.0).abs() <= 1e-10, "{errors:?}");
         }
     }
+}
+
+// ---------------------------------------------------------------------------------------------------------
+// ΩΛ: the magic-parameter-consistent partially saturated operator
+// ---------------------------------------------------------------------------------------------------------
+
+fn open_mask() -> impl Strategy<Value = OpenLinks> {
+    any::<u16>().prop_map(|m| m & ALL_LINKS_OPEN)
+}
+
+fn open_bools(m: OpenLinks) -> [bool; Q] {
+    core::array::from_fn(|i| i != 0 && m & (1 << i) != 0)
+}
+
+fn fluid_choice() -> impl Strategy<Value = Option<f64>> {
+    prop_oneof![Just(None), magic().prop_map(Some)]
+}
+
+fn collision_of(magic: Option<f64>) -> Collision<f64> {
+    magic.map_or(Collision::Bgk, trt)
+}
+
+fn lambda_params(tau: f64, w: Weighting, force: [f64; 2], magic: Option<f64>) -> PsmParams<f64> {
+    PsmParams {
+        tau,
+        weighting: w,
+        force,
+        solid: SolidOperator::LambdaConsistent,
+        collision: collision_of(magic),
+    }
+}
+
+proptest! {
+    /// ΩΛ conserves mass; the fluid's momentum changes by (1 − B) F minus what the solids receive (momentum is
+    /// exchanged, never created); it equals the reference (written from the definition), exchange included,
+    /// for BGK and TRT, both weightings, partly and fully covered nodes (shares summing past 1 included) and
+    /// any set of open links.
+    #[test]
+    fn lambda_operator_exchanges_momentum_with_the_solids(
+        f in node_populations(), tau in tau(), magic in fluid_choice(), shares in shares(), w in weighting(),
+        forced in any::<bool>(), force in force(), open in open_mask(),
+    ) {
+        let force = if forced { force } else { [0.0; 2] };
+        let params = lambda_params(tau, w, force, magic);
+        let mut g = f;
+        let mut exchange = vec![[f64::NAN; 2]; shares.len()];
+        let b = psm_collide_links(&mut g, &params, &shares, open, &mut exchange);
+        prop_assert!((0.0..=1.0).contains(&b));
+        let tol = ROUNDOFF * scale(&f);
+        prop_assert!((density(&g) - density(&f)).abs() <= tol);
+        let (j0, j1) = (momentum(&f), momentum(&g));
+        for a in 0..2 {
+            let handed: f64 = exchange.iter().map(|e| e[a]).sum();
+            prop_assert!((j1[a] - j0[a] - ((1.0 - b) * force[a] - handed)).abs() <= tol, "axis {a}");
+        }
+        let (r, ex) = reference::psm_lambda(
+            &f, tau, magic, to_reference_weighting(w), force, &to_reference_solids(&shares), open_bools(open),
+        );
+        prop_assert!(max_abs_diff(&g, &r) <= ORACLE * scale(&f), "{g:?}\nvs {r:?}");
+        for (k, e) in exchange.iter().zip(&ex) {
+            prop_assert!(max_abs_diff(k, e) <= ORACLE * scale(&f));
+        }
+    }
+
+    /// The velocity ΩΛ reports ([`psm_velocity`], what fluxes are measured with) is the trapezoidal velocity of
+    /// its update at a partly covered node, (pre + post momentum)/(2ρ), and the solid's velocity at a fully
+    /// covered one.
+    #[test]
+    fn lambda_velocity_is_the_velocity_of_the_update(
+        f in node_populations(), tau in tau(), magic in fluid_choice(), shares in shares(), w in weighting(),
+        forced in any::<bool>(), force in force(),
+    ) {
+        let force = if forced { force } else { [0.0; 2] };
+        let params = lambda_params(tau, w, force, magic);
+        let (rho, u) = psm_velocity(&f, &params, &shares);
+        let mut g = f;
+        let mut exchange = vec![[0.0; 2]; shares.len()];
+        psm_collide(&mut g, &params, &shares, &mut exchange);
+        let eps: f64 = shares.iter().map(|s| s.fraction).sum();
+        prop_assert_eq!(rho, density(&f));
+        let tol = ROUNDOFF * scale(&f);
+        if eps >= 1.0 {
+            for (a, ua) in u.iter().enumerate() {
+                let want: f64 = shares.iter().map(|s| s.fraction / eps * s.velocity[a]).sum();
+                prop_assert!((ua - want).abs() <= tol);
+            }
+        } else if eps > 0.0 {
+            let (j0, j1) = (momentum(&f), momentum(&g));
+            for a in 0..2 {
+                prop_assert!((u[a] - 0.5 * (j0[a] + j1[a]) / rho).abs() <= tol, "axis {a}");
+            }
+        }
+    }
+
+    /// ΩΛ with every solid fraction zero is bitwise the fluid collision and hands nothing over.
+    #[test]
+    fn lambda_operator_with_zero_solid_fraction_is_bitwise_the_fluid_collision(
+        f in node_populations(), tau in tau(), magic in fluid_choice(), n in 0usize..=3, u_s in velocity(),
+        forced in any::<bool>(), force in force(), open in open_mask(),
+    ) {
+        let force = if forced { force } else { [0.0; 2] };
+        let params = lambda_params(tau, Weighting::SolidFraction, force, magic);
+        let shares = vec![SolidShare { fraction: 0.0, velocity: u_s }; n];
+        let mut exchange = vec![[f64::NAN; 2]; n];
+        let mut g = f;
+        prop_assert_eq!(psm_collide_links(&mut g, &params, &shares, open, &mut exchange), 0.0);
+        let mut h = f;
+        let c = collision_of(magic);
+        fluid_collide(&mut h, &c, c.rates(tau).expect("valid rates"), force);
+        prop_assert_eq!(g.map(f64::to_bits), h.map(f64::to_bits));
+        prop_assert!(exchange.iter().all(|e| *e == [0.0, 0.0]));
+    }
+
+    /// A fully covered ΩΛ node with no open link (inside a solid) leaves at the solid's equilibrium,
+    /// f^eq(ρ, u_s): the fluid inside a solid moves with it (what keeps free grains stable). With every link open
+    /// and the solid at rest it is pure bounce-back, f_i ← f_ī (the rest population kept), whatever τ.
+    #[test]
+    fn lambda_operator_at_full_cover_moves_with_the_solid_or_bounces_back(
+        f in node_populations(), tau in tau(), magic in fluid_choice(), u_s in velocity(),
+    ) {
+        let params = lambda_params(tau, Weighting::SolidFraction, [0.0; 2], magic);
+        let tol = ROUNDOFF * scale(&f);
+        let mut g = f;
+        let mut ex = [[0.0; 2]; 1];
+        psm_collide_links(&mut g, &params, &[SolidShare { fraction: 1.0, velocity: u_s }], 0, &mut ex);
+        let want = equilibrium(density(&f), u_s);
+        prop_assert!(max_abs_diff(&g, &want) <= tol, "{g:?} vs {want:?}");
+        let mut h = f;
+        psm_collide_links(&mut h, &params, &[SolidShare { fraction: 1.0, velocity: [0.0; 2] }], ALL_LINKS_OPEN, &mut ex);
+        // The rest population gets the mass that remains, ρ − Σ_{i≠0} f_ī = f₀ up to roundoff.
+        for i in 0..Q {
+            prop_assert!((h[i] - f[OPPOSITE[i]]).abs() <= tol, "direction {i}");
+        }
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(128))]
+
+    /// A whole step with ΩΛ at the covered nodes (open links from the coverage, the obstacles and the sides)
+    /// equals the reference step, in f64 and f32, on random lattices with random coverage (fractions often
+    /// exactly 1, and sums past 1, so fully covered nodes with every mix of open links occur) and TRT or BGK.
+    #[test]
+    fn lambda_step_matches_the_reference(nx in 1usize..=12, ny in 1usize..=12, seed in any::<u64>(), bgk in any::<bool>()) {
+        let mut p = random_trt_problem(nx, ny, seed, 0.1, 0.5);
+        p.lambda = true;
+        if bgk {
+            p.magic = None;
+        }
+        compare_steps::<f64>(&p, true, ORACLE)?;
+        compare_steps::<f32>(&p, true, ORACLE_F32)?;
+    }
+
+    /// ΩΛ updated as several bands (as threads do) is bitwise the one-band update, exchange included.
+    #[test]
+    fn lambda_bands_are_independent(
+        nx in 1usize..=12, ny in 1usize..=12, seed in any::<u64>(),
+        cuts in prop::collection::vec(0usize..=12, 0..4),
+    ) {
+        let mut p = random_trt_problem(nx, ny, seed, 0.1, 0.5);
+        p.lambda = true;
+        let mut cuts: Vec<usize> = cuts.into_iter().map(|c| c.min(ny)).collect();
+        cuts.sort_unstable();
+        let (one, ex1) = kernel_step::<f64>(&p, &[], true);
+        let (many, ex2) = kernel_step::<f64>(&p, &cuts, true);
+        for (a, b) in one.iter().zip(&many) {
+            prop_assert_eq!(a.map(f64::to_bits), b.map(f64::to_bits));
+        }
+        prop_assert_eq!(
+            ex1.iter().flatten().map(|v| v.to_bits()).collect::<Vec<_>>(),
+            ex2.iter().flatten().map(|v| v.to_bits()).collect::<Vec<_>>()
+        );
+    }
+}
+
+// ---------------------------------------------------------------------------------------------------------
+// Moving walls (Ladd's correction) and velocity profiles on Zou–He sides
+// ---------------------------------------------------------------------------------------------------------
+
+/// A random problem (TRT or BGK, coverage with ΩΛ or Ω₁) whose non-periodic sides are, at random, also moving
+/// walls (tangential velocity) and velocity-profile sides (a random velocity per node).
+fn random_problem_with_moving_walls(nx: usize, ny: usize, seed: u64) -> Problem {
+    let mut p = random_trt_problem(nx, ny, seed, 0.1, 0.3);
+    let mut rng = SplitMix(seed ^ 0x4D4F_5649_4E47);
+    p.lambda = rng.chance(0.5);
+    if rng.chance(0.3) {
+        p.magic = None;
+    }
+    let mut profiles = reference::Profiles::default();
+    for side in [Side::West, Side::East, Side::South, Side::North] {
+        let cond = match side {
+            Side::West => &mut p.bc.west,
+            Side::East => &mut p.bc.east,
+            Side::South => &mut p.bc.south,
+            Side::North => &mut p.bc.north,
+        };
+        if *cond == SideCondition::Periodic {
+            continue;
+        }
+        let along_y = matches!(side, Side::West | Side::East);
+        match rng.below(3) {
+            0 => {
+                let v = rng.range(-0.1, 0.1);
+                *cond = SideCondition::MovingWall {
+                    velocity: if along_y { [0.0, v] } else { [v, 0.0] },
+                };
+            }
+            1 => {
+                *cond = SideCondition::VelocityProfile;
+                let n = if along_y { ny } else { nx };
+                let values: Vec<[f64; 2]> = (0..n).map(|_| rng.velocity()).collect();
+                match side {
+                    Side::West => profiles.west = values,
+                    Side::East => profiles.east = values,
+                    Side::South => profiles.south = values,
+                    Side::North => profiles.north = values,
+                }
+            }
+            _ => {}
+        }
+    }
+    assert_eq!(p.bc.validate(), Ok(()));
+    p.profiles = profiles;
+    p
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(128))]
+
+    /// Steps with moving walls and velocity-profile sides (and their corners with every other kind of side)
+    /// equal the reference step, which applies Ladd's correction after plain bounce-back and closes profile
+    /// sides with each node's own velocity; f64 and f32.
+    #[test]
+    fn moving_walls_and_velocity_profiles_match_the_reference(
+        nx in 1usize..=12, ny in 1usize..=12, seed in any::<u64>(),
+    ) {
+        let p = random_problem_with_moving_walls(nx, ny, seed);
+        compare_steps::<f64>(&p, true, ORACLE)?;
+        compare_steps::<f32>(&p, true, ORACLE_F32)?;
+    }
+
+    /// Every fluid node of a profile side that is not a corner with another Zou–He side leaves the gather with
+    /// exactly its own prescribed velocity, and the node next to a moving wall at rest gains nothing.
+    #[test]
+    fn a_profile_side_imposes_each_nodes_velocity(nx in 3usize..=12, ny in 3usize..=12, seed in any::<u64>()) {
+        let mut rng = SplitMix(seed);
+        let mut p = random_problem(nx, ny, seed, 0.0, 0.0);
+        p.bc = Boundaries {
+            west: SideCondition::VelocityProfile,
+            east: SideCondition::Pressure { density: 1.0 },
+            south: SideCondition::MovingWall { velocity: [0.0, 0.0] },
+            north: SideCondition::Wall,
+        };
+        let profile: Vec<[f64; 2]> = (0..ny).map(|_| rng.velocity()).collect();
+        let profiles = SideProfiles { west: &profile, east: &[], south: &[], north: &[] };
+        prop_assert_eq!(profiles.validate(&p.bc, nx, ny), Ok(()));
+        let shape = LatticeShape::for_type::<f64>(nx, ny).expect("small lattice");
+        let flags = vec![FLUID; shape.nodes()];
+        let src = to_buffer::<f64>(&shape, &p.lattice.f);
+        for (y, want) in profile.iter().enumerate().take(ny - 1).skip(1) {
+            let g = gather_node(&shape, &src, &p.bc, &profiles, &flags, 0, y);
+            let (rho, j) = (density(&g), momentum(&g));
+            for a in 0..2 {
+                prop_assert!((j[a] - rho * want[a]).abs() <= ROUNDOFF * scale(&g), "y {y} axis {a}");
+            }
+        }
+        // A moving wall at rest is a wall.
+        for x in 1..nx - 1 {
+            let g = gather_node(&shape, &src, &p.bc, &profiles, &flags, x, 0);
+            let mut q = p.clone();
+            q.bc.south = SideCondition::Wall;
+            let h = gather_node(&shape, &src, &q.bc, &profiles, &flags, x, 0);
+            prop_assert_eq!(g.map(f64::to_bits), h.map(f64::to_bits));
+        }
+    }
+}
+
+/// Profiles of the wrong length or with bad values, and moving walls with a normal velocity, are refused.
+#[test]
+fn bad_profiles_and_wall_velocities_are_refused() {
+    use lbdem_kernels::fluid::boundary::BoundaryError;
+    let bc = Boundaries {
+        west: SideCondition::VelocityProfile,
+        east: SideCondition::Pressure { density: 1.0 },
+        south: SideCondition::Wall,
+        north: SideCondition::MovingWall {
+            velocity: [0.05, 0.0],
+        },
+    };
+    assert_eq!(bc.validate(), Ok(()));
+    let short = [[0.0; 2]; 3];
+    let ok = [[0.01, 0.0]; 4];
+    let nan = [[0.0, 0.0], [f64::NAN, 0.0], [0.0; 2], [0.0; 2]];
+    let fast = [[0.0, 0.0], [1.0, 0.0], [0.0; 2], [0.0; 2]];
+    fn with(w: &[[f64; 2]]) -> SideProfiles<'_, f64> {
+        SideProfiles {
+            west: w,
+            east: &[],
+            south: &[],
+            north: &[],
+        }
+    }
+    assert_eq!(
+        with(&short).validate(&bc, 5, 4),
+        Err(BoundaryError::ProfileLength(Side::West))
+    );
+    assert_eq!(with(&ok).validate(&bc, 5, 4), Ok(()));
+    assert_eq!(
+        with(&nan).validate(&bc, 5, 4),
+        Err(BoundaryError::BadVelocity(Side::West))
+    );
+    assert_eq!(
+        with(&fast).validate(&bc, 5, 4),
+        Err(BoundaryError::BadVelocity(Side::West))
+    );
+    let normal = Boundaries {
+        north: SideCondition::MovingWall {
+            velocity: [0.0, 0.01],
+        },
+        ..bc
+    };
+    assert_eq!(
+        normal.validate(),
+        Err(BoundaryError::WallVelocityNotTangential(Side::North))
+    );
 }

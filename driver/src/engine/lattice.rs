@@ -13,16 +13,17 @@ use lbdem_kernels::fluid::aa::{
     load_from_rows, plane_row, store_in_rows, store_post_collision_in_plane, to_collided, AaStep,
     Layout,
 };
-use lbdem_kernels::fluid::boundary::{Boundaries, SideCondition};
+use lbdem_kernels::fluid::boundary::{Boundaries, SideCondition, SideProfiles};
 use lbdem_kernels::fluid::collide::{
-    psm_collide, Collision, PsmParams, SolidOperator, SolidShare, Weighting,
+    psm_collide_links, psm_velocity, Collision, OpenLinks, PsmParams, SolidOperator, SolidShare,
+    Weighting,
 };
 use lbdem_kernels::fluid::d2q9::{equilibrium, OPPOSITE, Q};
 use lbdem_kernels::fluid::lattice::{LatticeShape, Side};
 use lbdem_kernels::fluid::step::{
     classify_special_nodes, collide_covered_nodes, covered_node_value, fix_special_nodes,
-    gathered_moments_in, nodes_in_rows, planes_mut, special_node_value, CoveredNodes, Domain,
-    FluidParams, FLUID, SOLID,
+    gather_node_in, gathered_moments_in, nodes_in_rows, open_links, planes_mut, special_node_value,
+    CoveredNodes, Domain, FluidParams, FLUID, SOLID,
 };
 use lbdem_kernels::Real;
 use rayon::prelude::*;
@@ -88,6 +89,9 @@ pub struct FluidLattice<T: Real> {
     solid_operator: SolidOperator,
     /// The fluid collision (BGK unless [`FluidLattice::set_collision`] chose TRT).
     collision: Collision<T>,
+    /// Velocity profiles of [`SideCondition::VelocityProfile`] sides (west, east, south, north; empty for other
+    /// sides, zero velocity until [`FluidLattice::set_side_profile`]).
+    profiles: [Vec<[T; 2]>; 4],
     simd: SimdLevel,
     streaming: Streaming,
     /// Layout of the current buffer (always [`Layout::Collided`] with the two-lattice scheme).
@@ -104,6 +108,8 @@ struct CoverScratch {
     bodies: Vec<BodyCells>,
     count: Vec<u32>,
     row_span: Vec<(u32, u32)>,
+    /// Per node: fully covered (Σ ε ≥ 1); all false between calls.
+    full: Vec<bool>,
 }
 
 /// The cells one body covers: its cell range and (node, fraction) for every cell with a positive fraction, in
@@ -163,6 +169,16 @@ impl BodyCells {
     }
 }
 
+/// The kernel's view of the lattice's side profiles.
+fn side_profiles<T: Real>(p: &[Vec<[T; 2]>; 4]) -> SideProfiles<'_, T> {
+    SideProfiles {
+        west: &p[0],
+        east: &p[1],
+        south: &p[2],
+        north: &p[3],
+    }
+}
+
 /// Whether node (x, y) lies on a Zou–He (pressure or velocity) side.
 fn on_zou_he_side<T: Real>(s: &LatticeShape, bc: &Boundaries<T>, x: usize, y: usize) -> bool {
     (x == 0 && bc.west.is_zou_he())
@@ -189,6 +205,41 @@ struct Coverage<T> {
     share_nodes: Vec<[f64; 2]>,
     exchange: Vec<[T; 2]>,
     weighting: Weighting,
+    /// Links of each covered node to nodes that are not fully covered (read by ΩΛ only). Derived from the
+    /// rest of the coverage, the side conditions and the flags: not saved, recomputed on load.
+    #[serde(skip)]
+    links: Vec<OpenLinks>,
+}
+
+/// Fill `cov.links` from the coverage, the side conditions and the obstacle flags. `full` is a per-node
+/// scratch map, all false on entry and on return.
+fn compute_links<T: Real>(
+    cov: &mut Coverage<T>,
+    shape: &LatticeShape,
+    bc: &Boundaries<T>,
+    flags: &[u8],
+    full: &mut Vec<bool>,
+) {
+    full.resize(shape.nodes(), false);
+    let is_full = |k: usize| -> bool {
+        // The sum the collision forms (same order), compared as the collision compares it.
+        let mut eps = T::zero();
+        for s in &cov.shares[cov.offsets[k] as usize..cov.offsets[k + 1] as usize] {
+            eps += s.fraction;
+        }
+        eps >= T::one()
+    };
+    for (k, &n) in cov.nodes.iter().enumerate() {
+        full[n as usize] = is_full(k);
+    }
+    cov.links.clear();
+    cov.links.extend(cov.nodes.iter().map(|&n| {
+        let (x, y) = shape.coords(n as usize);
+        open_links(shape, bc, flags, x, y, |j| full[j])
+    }));
+    for &n in &cov.nodes {
+        full[n as usize] = false;
+    }
 }
 
 /// A disc as the fluid sees it: centre and radius (lattice units), rigid-body velocity and angular velocity.
@@ -249,6 +300,15 @@ impl<T: Real> FluidLattice<T> {
             cover_scratch: CoverScratch::default(),
             solid_operator: SolidOperator::default(),
             collision: Collision::Bgk,
+            profiles: [Side::West, Side::East, Side::South, Side::North].map(|side| {
+                match (bc.side(side), side) {
+                    (SideCondition::VelocityProfile, Side::West | Side::East) => {
+                        vec![[T::zero(); 2]; ny]
+                    }
+                    (SideCondition::VelocityProfile, _) => vec![[T::zero(); 2]; nx],
+                    _ => Vec::new(),
+                }
+            }),
             simd: SimdLevel::detect(),
             streaming,
             layout: Layout::Collided,
@@ -385,7 +445,21 @@ impl<T: Real> FluidLattice<T> {
         self.reclassify();
     }
 
+    /// Recompute the open links of the covered nodes (they depend on the coverage and the obstacle flags).
+    fn refresh_links(&mut self) {
+        if let Some(cov) = self.coverage.as_mut() {
+            compute_links(
+                cov,
+                &self.shape,
+                &self.bc,
+                &self.flags,
+                &mut self.cover_scratch.full,
+            );
+        }
+    }
+
     fn reclassify(&mut self) {
+        self.refresh_links();
         let mut list = vec![0u32; self.shape.nodes()];
         let count = classify_special_nodes(&self.shape, &self.bc, &self.flags, &mut list);
         list.truncate(count);
@@ -527,6 +601,7 @@ impl<T: Real> FluidLattice<T> {
             share_nodes: Vec::new(),
             exchange: Vec::new(),
             weighting,
+            links: Vec::new(),
         });
         cov.weighting = weighting;
         cov.nodes.clear();
@@ -582,7 +657,120 @@ impl<T: Real> FluidLattice<T> {
         }
         cov.exchange.clear();
         cov.exchange.resize(total, [T::zero(); 2]);
+        compute_links(&mut cov, &s, &bc, &self.flags, &mut scratch.full);
         self.coverage = Some(cov);
+    }
+
+    /// Cover the lattice with one solid (body 0) given cell by cell: the fraction `fraction(x, y)` of each cell it
+    /// covers and its velocity `velocity(x, y)` there (lattice units), for solids that are not discs or ellipses
+    /// (a slab, a half-space). Replaces any previous coverage; cells with a zero fraction and nodes on Zou–He
+    /// sides are not covered (as in [`FluidLattice::cover_with_bodies`]). Its force and torque are body 0's in
+    /// [`FluidLattice::solid_forces_and_torques`]. Refuses a fraction outside [0, 1] or a velocity that is not
+    /// finite or not below the lattice speed, naming the cell.
+    pub fn cover_with_field(
+        &mut self,
+        fraction: impl Fn(usize, usize) -> f64,
+        velocity: impl Fn(usize, usize) -> [f64; 2],
+        weighting: Weighting,
+    ) -> Result<()> {
+        let s = self.shape;
+        let mut cov = Coverage {
+            nodes: Vec::new(),
+            offsets: vec![0],
+            shares: Vec::new(),
+            owners: Vec::new(),
+            share_nodes: Vec::new(),
+            exchange: Vec::new(),
+            weighting,
+            links: Vec::new(),
+        };
+        for y in 0..s.ny {
+            for x in 0..s.nx {
+                let e = fraction(x, y);
+                if !(0.0..=1.0).contains(&e) {
+                    return Err(LbdemError::field(
+                        "solid fraction",
+                        format!("{e} at node ({x}, {y})"),
+                        "must lie in [0, 1]",
+                        "give the fraction of the cell the solid covers",
+                    ));
+                }
+                let v = velocity(x, y);
+                if !(v[0].is_finite() && v[1].is_finite() && v[0].abs() < 1.0 && v[1].abs() < 1.0) {
+                    return Err(LbdemError::field(
+                        "solid velocity",
+                        format!("{v:?} at node ({x}, {y})"),
+                        "must be finite and below the lattice speed 1",
+                        "convert the velocity to lattice units (u dt/h)",
+                    ));
+                }
+                if e == 0.0 || on_zou_he_side(&s, &self.bc, x, y) {
+                    continue;
+                }
+                cov.nodes.push(s.index(x, y) as u32);
+                cov.shares.push(SolidShare {
+                    fraction: T::lit(e),
+                    velocity: [T::lit(v[0]), T::lit(v[1])],
+                });
+                cov.offsets.push(cov.shares.len() as u32);
+                cov.owners.push(0);
+                cov.share_nodes.push([x as f64, y as f64]);
+            }
+        }
+        cov.exchange = vec![[T::zero(); 2]; cov.shares.len()];
+        self.cover_scratch = CoverScratch::default();
+        compute_links(
+            &mut cov,
+            &s,
+            &self.bc,
+            &self.flags,
+            &mut self.cover_scratch.full,
+        );
+        self.coverage = Some(cov);
+        Ok(())
+    }
+
+    /// Set the velocity profile of a [`SideCondition::VelocityProfile`] side: one velocity (lattice units) per
+    /// node along it, in order of x (south, north) or y (west, east). Refused, with the lattice unchanged, for a
+    /// side that is not a profile side, a profile of the wrong length, or a velocity that is not finite or not
+    /// below the lattice speed.
+    pub fn set_side_profile(&mut self, side: Side, profile: &[[f64; 2]]) -> Result<()> {
+        let k = match side {
+            Side::West => 0,
+            Side::East => 1,
+            Side::South => 2,
+            Side::North => 3,
+        };
+        let field = format!("boundary.{side:?}.profile").to_lowercase();
+        if self.bc.side(side) != SideCondition::VelocityProfile {
+            return Err(LbdemError::field(
+                &field,
+                format!("{side:?}"),
+                "is not a velocity-profile side",
+                "declare the side as SideCondition::VelocityProfile when building the lattice",
+            ));
+        }
+        let values: Vec<[T; 2]> = profile.iter().map(|v| v.map(T::lit)).collect();
+        let mut candidate = self.profiles.clone();
+        candidate[k] = values;
+        side_profiles(&candidate)
+            .validate(&self.bc, self.shape.nx, self.shape.ny)
+            .map_err(|e| {
+                let n = match side {
+                    Side::West | Side::East => self.shape.ny,
+                    Side::South | Side::North => self.shape.nx,
+                };
+                LbdemError::field(
+                    &field,
+                    format!("{} values", profile.len()),
+                    &format!("is refused ({e:?})"),
+                    &format!(
+                        "give {n} finite velocities below the lattice speed, one per node along the side"
+                    ),
+                )
+            })?;
+        self.profiles = candidate;
+        Ok(())
     }
 
     /// Change the prescribed density of a Zou–He pressure side (e.g. the boundary pressure drop of the fracture
@@ -717,6 +905,7 @@ impl<T: Real> FluidLattice<T> {
         let domain = Domain {
             shape,
             bc: self.bc,
+            profiles: side_profiles(&self.profiles),
             flags: &self.flags,
         };
         let mask = &self.special_mask;
@@ -727,16 +916,23 @@ impl<T: Real> FluidLattice<T> {
             solid: self.solid_operator,
             collision: self.collision,
         });
-        let (covered, offsets, shares, exchange): (&[u32], &[u32], &[SolidShare<T>], _) =
-            match &mut self.coverage {
-                Some(c) => (
-                    &c.nodes[..],
-                    &c.offsets[..],
-                    &c.shares[..],
-                    &mut c.exchange[..],
-                ),
-                None => (&[], &[0], &[], &mut [][..]),
-            };
+        type Lists<'a, T> = (
+            &'a [u32],
+            &'a [u32],
+            &'a [SolidShare<T>],
+            &'a [OpenLinks],
+            &'a mut [[T; 2]],
+        );
+        let (covered, offsets, shares, links, exchange): Lists<'_, T> = match &mut self.coverage {
+            Some(c) => (
+                &c.nodes[..],
+                &c.offsets[..],
+                &c.shares[..],
+                &c.links[..],
+                &mut c.exchange[..],
+            ),
+            None => (&[], &[0], &[], &[], &mut [][..]),
+        };
         // Every entry is rewritten below (phase 1 for the special covered nodes, phase 2 for the others).
         covered_vals.resize(covered.len(), None);
         // The covered nodes, their values and their exchange entries, split along the bands of rows.
@@ -779,8 +975,16 @@ impl<T: Real> FluidLattice<T> {
                         if mask[n] {
                             let (a, b) = (offsets[k] as usize, offsets[k + 1] as usize);
                             let ex = &mut ex[a - first..b - first];
-                            *v =
-                                covered_node_value(&domain, buf, layout, psm, n, &shares[a..b], ex);
+                            *v = covered_node_value(
+                                &domain,
+                                buf,
+                                layout,
+                                psm,
+                                n,
+                                &shares[a..b],
+                                links[k],
+                                ex,
+                            );
                         }
                     }
                 });
@@ -815,7 +1019,8 @@ impl<T: Real> FluidLattice<T> {
                             let n = covered[k] as usize;
                             let mut f = load_from_rows(band, kind, y0, n % nx, n / nx);
                             let (a, b) = (offsets[k] as usize, offsets[k + 1] as usize);
-                            psm_collide(&mut f, psm, &shares[a..b], &mut ex[a - first..b - first]);
+                            let ex = &mut ex[a - first..b - first];
+                            psm_collide_links(&mut f, psm, &shares[a..b], links[k], ex);
                             *v = Some(f);
                         }
                     }
@@ -871,6 +1076,7 @@ impl<T: Real> FluidLattice<T> {
         let domain = Domain {
             shape,
             bc: self.bc,
+            profiles: side_profiles(&self.profiles),
             flags: &self.flags,
         };
         let params = self.params;
@@ -897,7 +1103,13 @@ impl<T: Real> FluidLattice<T> {
         // Split the covered nodes and their exchange buffer along the same bands.
         type Band<'a, T> = (usize, [&'a mut [T]; Q], (usize, usize), &'a mut [[T; 2]]);
         let mut work: Vec<Band<'_, T>> = Vec::with_capacity(bands);
-        type Static<'a, T> = (&'a [u32], &'a [u32], &'a [SolidShare<T>], Weighting);
+        type Static<'a, T> = (
+            &'a [u32],
+            &'a [u32],
+            &'a [SolidShare<T>],
+            Weighting,
+            &'a [OpenLinks],
+        );
         let (cov, mut exchange_rest): (Option<Static<'_, T>>, &mut [[T; 2]]) =
             match &mut self.coverage {
                 Some(Coverage {
@@ -906,15 +1118,22 @@ impl<T: Real> FluidLattice<T> {
                     shares,
                     exchange,
                     weighting,
+                    links,
                     ..
                 }) => (
-                    Some((&nodes[..], &offsets[..], &shares[..], *weighting)),
+                    Some((
+                        &nodes[..],
+                        &offsets[..],
+                        &shares[..],
+                        *weighting,
+                        &links[..],
+                    )),
                     &mut exchange[..],
                 ),
                 None => (None, &mut []),
             };
         let (cov_nodes, offsets): (&[u32], &[u32]) = match cov {
-            Some((n, o, _, _)) => (n, o),
+            Some((n, o, _, _, _)) => (n, o),
             None => (&[], &[0]),
         };
         let mut lo = 0usize;
@@ -944,12 +1163,13 @@ impl<T: Real> FluidLattice<T> {
                 let sp = nodes_in_rows(&shape, special, y0, y1);
                 bulk_band_exec(simd, &shape, src, &mut band, y0, y1, &params, &collision);
                 fix_special_nodes(&domain, src, &mut band, y0, &params, &collision, sp);
-                if let (Some((nodes, offsets, shares, _)), Some(psm)) = (cov, psm.as_ref()) {
+                if let (Some((nodes, offsets, shares, _, links)), Some(psm)) = (cov, psm.as_ref()) {
                     if hi > lo {
                         let covered = CoveredNodes {
                             nodes: &nodes[lo..hi],
                             offsets: &offsets[lo..=hi],
                             shares,
+                            links: &links[lo..hi],
                         };
                         collide_covered_nodes(&domain, src, &mut band, y0, psm, covered, exchange);
                     }
@@ -958,7 +1178,10 @@ impl<T: Real> FluidLattice<T> {
         self.first_is_current = !self.first_is_current;
     }
 
-    /// Density and velocity of every node (row-major), as the next collision sees them.
+    /// Density and velocity of every node (row-major), as the next collision sees them: (Σ f c + F/2)/ρ, and at
+    /// nodes covered under ΩΛ ([`SolidOperator::LambdaConsistent`]) the velocity its collision uses, with the
+    /// solids' friction (the velocity that makes measured fluxes independent of τ; the solid velocity at fully
+    /// covered nodes).
     pub fn moments(&self) -> (Vec<T>, Vec<[T; 2]>) {
         let n = self.shape.nodes();
         let mut rho = vec![T::zero(); n];
@@ -968,11 +1191,40 @@ impl<T: Real> FluidLattice<T> {
             self.current(),
             self.layout,
             &self.bc,
+            &side_profiles(&self.profiles),
             &self.flags,
             self.params.force,
             &mut rho,
             &mut u,
         );
+        if let (Some(c), SolidOperator::LambdaConsistent) = (&self.coverage, self.solid_operator) {
+            let psm = PsmParams {
+                tau: self.params.tau,
+                weighting: c.weighting,
+                force: self.params.force,
+                solid: self.solid_operator,
+                collision: self.collision,
+            };
+            for (k, &node) in c.nodes.iter().enumerate() {
+                let node = node as usize;
+                if self.flags[node] == SOLID {
+                    continue;
+                }
+                let (x, y) = self.shape.coords(node);
+                let f = gather_node_in(
+                    &self.shape,
+                    self.current(),
+                    self.layout,
+                    &self.bc,
+                    &side_profiles(&self.profiles),
+                    &self.flags,
+                    x,
+                    y,
+                );
+                let shares = &c.shares[c.offsets[k] as usize..c.offsets[k + 1] as usize];
+                u[node] = psm_velocity(&f, &psm, shares).1;
+            }
+        }
         (rho, u)
     }
 
@@ -1169,7 +1421,7 @@ mod tests {
         let mut incremental = FluidLattice::<T>::new(nx, ny, bc, params).unwrap();
         let mut scratch = FluidLattice::<T>::new(nx, ny, bc, params).unwrap();
         for l in [&mut incremental, &mut scratch] {
-            l.set_solid_operator(SolidOperator::BounceBack);
+            l.set_solid_operator(SolidOperator::MovingWallBounceBack);
             l.fill_equilibrium(|x, y| {
                 (
                     T::one(),

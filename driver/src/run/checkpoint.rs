@@ -51,8 +51,9 @@ pub use crate::output::{CHECKPOINT_FILE, DIVERGED_FILE, SCENE_COPY};
 /// First bytes of every checkpoint file.
 pub const MAGIC: [u8; 8] = *b"LBDEMCKP";
 /// Version of the layout; bumped whenever the header or the payload encoding changes. Version 1 (hand-written
-/// payloads) was replaced by version 2 (serde + postcard payloads).
-pub const FORMAT_VERSION: u32 = 2;
+/// payloads) was replaced by version 2 (serde + postcard payloads); version 3 adds the lattice's side velocity
+/// profiles (issue 11), so version-2 files are refused with the version named.
+pub const FORMAT_VERSION: u32 = 3;
 /// SHA-256 of a scene text (stored in the header, checked on resume).
 pub fn scene_hash(text: &str) -> [u8; 32] {
     Sha256::digest(text.as_bytes()).into()

@@ -1,8 +1,14 @@
 //! Boundary conditions of the rectangular lattice.
 //!
 //! Each side is periodic, a half-way bounce-back wall (the wall lies half a spacing outside the edge nodes, so
-//! a channel of N edge-to-edge nodes has width H = N), or a Zou & He (1997) pressure (density) or velocity
-//! boundary applied on the edge nodes themselves.
+//! a channel of N edge-to-edge nodes has width H = N), at rest or sliding along itself, or a Zou & He (1997)
+//! pressure (density) or velocity boundary applied on the edge nodes themselves, the velocity uniform or given
+//! node by node ([`SideProfiles`]).
+//!
+//! **Moving wall** (Ladd 1994, J. Fluid Mech. 271:285, eq. 3.2): the population that re-enters through a wall
+//! sliding at u_w is the one that left, plus 6 w_i ρ c_i·u_w (c_i its new direction, ρ the density of the node's
+//! gathered populations before the correction). The wall velocity must lie along the wall, so no mass crosses
+//! it (the corrections of the three re-entering directions sum to zero).
 //!
 //! **Zou–He closure** (Phys. Fluids 9, 1591): after streaming, the three populations entering from outside
 //! the side are unknown. Mass and normal momentum fix ρ (velocity given) or the normal velocity (density
@@ -43,6 +49,80 @@ pub enum SideCondition<T> {
         /// Prescribed velocity (x, y).
         velocity: [T; 2],
     },
+    /// Half-way bounce-back wall sliding along itself at this velocity (Ladd's correction; the component
+    /// normal to the side must be zero).
+    MovingWall {
+        /// Wall velocity (x, y), lattice units.
+        velocity: [T; 2],
+    },
+    /// Zou–He velocity boundary with a velocity per edge node: node k along the side (x for south and north,
+    /// y for west and east) holds `profile[k]` of this side's entry in [`SideProfiles`].
+    VelocityProfile,
+}
+
+/// The velocity profiles of [`SideCondition::VelocityProfile`] sides, one value per node along each side (empty
+/// for the other sides). Caller-owned; checked by [`SideProfiles::validate`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SideProfiles<'a, T> {
+    /// x = 0, indexed by y.
+    pub west: &'a [[T; 2]],
+    /// x = nx − 1, indexed by y.
+    pub east: &'a [[T; 2]],
+    /// y = 0, indexed by x.
+    pub south: &'a [[T; 2]],
+    /// y = ny − 1, indexed by x.
+    pub north: &'a [[T; 2]],
+}
+
+impl<'a, T: Real> SideProfiles<'a, T> {
+    /// No profiles (for boundaries without [`SideCondition::VelocityProfile`] sides).
+    pub fn none() -> Self {
+        Self {
+            west: &[],
+            east: &[],
+            south: &[],
+            north: &[],
+        }
+    }
+
+    /// The profile of one side.
+    #[inline(always)]
+    pub fn side(&self, side: Side) -> &'a [[T; 2]] {
+        match side {
+            Side::West => self.west,
+            Side::East => self.east,
+            Side::South => self.south,
+            Side::North => self.north,
+        }
+    }
+
+    /// Check that every [`SideCondition::VelocityProfile`] side of `bc` has one finite velocity below the lattice
+    /// speed per node along it (`nx` nodes for south and north, `ny` for west and east).
+    pub fn validate(&self, bc: &Boundaries<T>, nx: usize, ny: usize) -> Result<(), BoundaryError> {
+        for side in [Side::West, Side::East, Side::South, Side::North] {
+            if bc.side(side) != SideCondition::VelocityProfile {
+                continue;
+            }
+            let p = self.side(side);
+            let n = match side {
+                Side::West | Side::East => ny,
+                Side::South | Side::North => nx,
+            };
+            if p.len() != n {
+                return Err(BoundaryError::ProfileLength(side));
+            }
+            if !p.iter().all(|v| velocity_ok(*v)) {
+                return Err(BoundaryError::BadVelocity(side));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// A prescribed velocity is finite and below the lattice speed 1 in both components.
+#[inline]
+fn velocity_ok<T: Real>(v: [T; 2]) -> bool {
+    v[0].is_finite() && v[1].is_finite() && v[0].abs() < T::one() && v[1].abs() < T::one()
 }
 
 impl<T: Real> SideCondition<T> {
@@ -51,7 +131,9 @@ impl<T: Real> SideCondition<T> {
     pub fn is_zou_he(&self) -> bool {
         matches!(
             self,
-            SideCondition::Pressure { .. } | SideCondition::Velocity { .. }
+            SideCondition::Pressure { .. }
+                | SideCondition::Velocity { .. }
+                | SideCondition::VelocityProfile
         )
     }
 }
@@ -79,6 +161,10 @@ pub enum BoundaryError {
     BadDensity(Side),
     /// A prescribed velocity is not finite or not below the lattice speed 1.
     BadVelocity(Side),
+    /// A moving wall's velocity has a component normal to its side.
+    WallVelocityNotTangential(Side),
+    /// A velocity profile does not have one value per node along its side.
+    ProfileLength(Side),
 }
 
 impl<T: Real> Boundaries<T> {
@@ -139,13 +225,19 @@ impl<T: Real> Boundaries<T> {
                 {
                     return Err(BoundaryError::BadDensity(side));
                 }
-                SideCondition::Velocity { velocity } => {
-                    let ok = velocity[0].is_finite()
-                        && velocity[1].is_finite()
-                        && velocity[0].abs() < T::one()
-                        && velocity[1].abs() < T::one();
-                    if !ok {
+                SideCondition::Velocity { velocity } if !velocity_ok(velocity) => {
+                    return Err(BoundaryError::BadVelocity(side));
+                }
+                SideCondition::MovingWall { velocity } => {
+                    if !velocity_ok(velocity) {
                         return Err(BoundaryError::BadVelocity(side));
+                    }
+                    let normal = match side {
+                        Side::West | Side::East => velocity[0],
+                        Side::South | Side::North => velocity[1],
+                    };
+                    if normal != T::zero() {
+                        return Err(BoundaryError::WallVelocityNotTangential(side));
                     }
                 }
                 _ => {}

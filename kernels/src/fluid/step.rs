@@ -20,12 +20,12 @@
 //! Each pass reads only `src` and writes only the band of `dst`, so bands are independent: splitting the
 //! lattice into bands for threads gives bitwise the same result for any number of threads.
 use super::aa::{load_post_collision, Layout};
-use super::boundary::{zou_he, zou_he_corner, Boundaries, SideCondition};
+use super::boundary::{zou_he, zou_he_corner, Boundaries, SideCondition, SideProfiles};
 use super::collide::{
-    bgk_collide, bgk_collide_forced, fluid_collide, psm_collide, trt_collide, trt_collide_forced,
-    Collision, PsmParams, SolidShare,
+    bgk_collide, bgk_collide_forced, fluid_collide, psm_collide_links, trt_collide,
+    trt_collide_forced, Collision, OpenLinks, PsmParams, SolidShare,
 };
-use super::d2q9::{density, equilibrium, OPPOSITE, Q, VELOCITIES};
+use super::d2q9::{density, equilibrium, velocity, weights, OPPOSITE, Q, VELOCITIES};
 use super::lattice::{wrap_row, LatticeShape, Neighbour, Side};
 use crate::Real;
 
@@ -73,10 +73,12 @@ pub fn load<T: Real>(shape: &LatticeShape, buf: &[T], index: usize) -> [T; Q] {
 
 /// Density and velocity (with the Guo half-force shift) of every node, from a post-collision buffer in the
 /// two-lattice layout: the moments of the populations after streaming, which is what the next collision sees.
+#[allow(clippy::too_many_arguments)]
 pub fn gathered_moments<T: Real>(
     shape: &LatticeShape,
     src: &[T],
     bc: &Boundaries<T>,
+    profiles: &SideProfiles<'_, T>,
     flags: &[u8],
     force: [T; 2],
     rho_out: &mut [T],
@@ -87,6 +89,7 @@ pub fn gathered_moments<T: Real>(
         src,
         Layout::Collided,
         bc,
+        profiles,
         flags,
         force,
         rho_out,
@@ -101,6 +104,7 @@ pub fn gathered_moments_in<T: Real>(
     src: &[T],
     layout: Layout,
     bc: &Boundaries<T>,
+    profiles: &SideProfiles<'_, T>,
     flags: &[u8],
     force: [T; 2],
     rho_out: &mut [T],
@@ -114,7 +118,7 @@ pub fn gathered_moments_in<T: Real>(
                 u_out[n] = [T::zero(); 2];
                 continue;
             }
-            let f = gather_node_in(shape, src, layout, bc, flags, x, y);
+            let f = gather_node_in(shape, src, layout, bc, profiles, flags, x, y);
             let (rho, u) = super::collide::macroscopic(&f, force);
             rho_out[n] = rho;
             u_out[n] = u;
@@ -126,17 +130,19 @@ pub fn gathered_moments_in<T: Real>(
 /// streamed populations (bounce-back included) already sit in the node's own reversed slots, so only the
 /// Zou–He closures remain to be applied.
 #[inline]
+#[allow(clippy::too_many_arguments)]
 pub fn gather_node_in<T: Real>(
     shape: &LatticeShape,
     src: &[T],
     layout: Layout,
     bc: &Boundaries<T>,
+    profiles: &SideProfiles<'_, T>,
     flags: &[u8],
     x: usize,
     y: usize,
 ) -> [T; Q] {
     match layout {
-        Layout::Collided => gather_node(shape, src, bc, flags, x, y),
+        Layout::Collided => gather_node(shape, src, bc, profiles, flags, x, y),
         Layout::Streamed => {
             let here = shape.index(x, y);
             let mut f: [T; Q] = core::array::from_fn(|q| src[shape.offset(OPPOSITE[q], here)]);
@@ -145,7 +151,7 @@ pub fn gather_node_in<T: Real>(
                 let density_at = |j: usize| {
                     density(&load_post_collision(shape, periodic, flags, layout, src, j))
                 };
-                close_edges(shape, bc, flags, x, y, &mut f, density_at);
+                close_edges(shape, bc, profiles, flags, x, y, &mut f, density_at);
             }
             f
         }
@@ -153,12 +159,14 @@ pub fn gather_node_in<T: Real>(
 }
 
 /// The general gather at node (x, y): streaming with periodic wrap, half-way bounce-back from solid obstacle
-/// nodes and wall sides, and the Zou–He closures of Zou–He sides (including corners).
+/// nodes and wall sides (with Ladd's correction at moving walls), and the Zou–He closures of Zou–He sides
+/// (including corners; velocities of profile sides from `profiles`).
 #[inline]
 pub fn gather_node<T: Real>(
     shape: &LatticeShape,
     src: &[T],
     bc: &Boundaries<T>,
+    profiles: &SideProfiles<'_, T>,
     flags: &[u8],
     x: usize,
     y: usize,
@@ -198,24 +206,47 @@ pub fn gather_node<T: Real>(
             }
         }
     }
-    close_edges(shape, bc, flags, x, y, &mut f, |j| {
+    close_edges(shape, bc, profiles, flags, x, y, &mut f, |j| {
         density(&load(shape, src, j))
     });
     f
 }
 
-/// Apply Zou–He closures to the gathered populations of an edge node. `density_at(j)` is the density (sum of
-/// the post-collision populations) of fluid node j, needed by corners between two velocity sides.
+/// Apply Ladd's moving-wall correction and the Zou–He closures to the gathered populations of an edge node.
+/// `density_at(j)` is the density (sum of the post-collision populations) of fluid node j, needed by corners
+/// between two velocity sides.
 #[inline]
+#[allow(clippy::too_many_arguments)]
 fn close_edges<T: Real>(
     shape: &LatticeShape,
     bc: &Boundaries<T>,
+    profiles: &SideProfiles<'_, T>,
     flags: &[u8],
     x: usize,
     y: usize,
     f: &mut [T; Q],
     density_at: impl Fn(usize) -> T,
 ) {
+    moving_wall_correction(shape, bc, x, y, f);
+    // The velocity a (profile) velocity side prescribes at this node.
+    let side_condition = |side: Side| -> SideCondition<T> {
+        match bc.side(side) {
+            SideCondition::VelocityProfile => {
+                let k = match side {
+                    Side::West | Side::East => y,
+                    Side::South | Side::North => x,
+                };
+                SideCondition::Velocity {
+                    velocity: profiles
+                        .side(side)
+                        .get(k)
+                        .copied()
+                        .unwrap_or([T::zero(); 2]),
+                }
+            }
+            c => c,
+        }
+    };
     let xs = if x == 0 && bc.west.is_zou_he() {
         Some(Side::West)
     } else if x + 1 == shape.nx && bc.east.is_zou_he() {
@@ -231,10 +262,10 @@ fn close_edges<T: Real>(
         None
     };
     match (xs, ys) {
-        (Some(s), None) => zou_he(f, s, bc.side(s)),
-        (None, Some(s)) => zou_he(f, s, bc.side(s)),
+        (Some(s), None) => zou_he(f, s, side_condition(s)),
+        (None, Some(s)) => zou_he(f, s, side_condition(s)),
         (Some(sx), Some(sy)) => {
-            let (cx, cy) = (bc.side(sx), bc.side(sy));
+            let (cx, cy) = (side_condition(sx), side_condition(sy));
             let rho = match (cx, cy) {
                 (
                     SideCondition::Pressure { density: a },
@@ -271,6 +302,36 @@ fn close_edges<T: Real>(
             zou_he_corner(f, sx, sy, rho, u);
         }
         (None, None) => {}
+    }
+}
+
+/// Ladd's correction of the populations of edge node (x, y) that re-entered through a moving wall side:
+/// f_q += 6 w_q ρ c_q·u_w, ρ the density of the gathered populations (see [`super::boundary`]). A population
+/// that crossed two sides (a corner) takes the velocity of the side it crossed along y if that side is a
+/// moving wall, else that of the side along x.
+#[inline]
+fn moving_wall_correction<T: Real>(
+    shape: &LatticeShape,
+    bc: &Boundaries<T>,
+    x: usize,
+    y: usize,
+    f: &mut [T; Q],
+) {
+    let wall_velocity = |side: Option<Side>| match side.map(|s| bc.side(s)) {
+        Some(SideCondition::MovingWall { velocity }) => Some(velocity),
+        _ => None,
+    };
+    let periodic = bc.periodic_axes();
+    let mut rho = None;
+    let w = weights::<T>();
+    for q in 1..Q {
+        if let Neighbour::Outside { x: sx, y: sy } = shape.upstream(x, y, q, periodic) {
+            if let Some(u) = wall_velocity(sy).or_else(|| wall_velocity(sx)) {
+                let r = *rho.get_or_insert_with(|| density(f));
+                let c = velocity::<T>(q);
+                f[q] += T::lit(6.0) * w[q] * r * (c[0] * u[0] + c[1] * u[1]);
+            }
+        }
     }
 }
 
@@ -412,14 +473,16 @@ pub fn stream_periodic<T: Real>(shape: &LatticeShape, src: &[T], dst: &mut [&mut
     bulk_rows(shape, src, dst, 0, shape.ny, |_f: &mut [T; Q]| {});
 }
 
-/// The static description of a lattice a step works on: its shape, side conditions and node flags
-/// ([`FLUID`] / [`SOLID`], one per node).
+/// The static description of a lattice a step works on: its shape, side conditions (with the velocity
+/// profiles of profile sides) and node flags ([`FLUID`] / [`SOLID`], one per node).
 #[derive(Clone, Copy, Debug)]
 pub struct Domain<'a, T> {
     /// Size and layout.
     pub shape: LatticeShape,
     /// Side conditions.
     pub bc: Boundaries<T>,
+    /// Velocity profiles of [`SideCondition::VelocityProfile`] sides.
+    pub profiles: SideProfiles<'a, T>,
     /// One flag per node.
     pub flags: &'a [u8],
 }
@@ -459,7 +522,7 @@ pub fn special_node_value<T: Real>(
         return equilibrium(T::one(), [T::zero(); 2]);
     }
     let (x, y) = shape.coords(n);
-    let mut f = gather_node_in(shape, src, layout, bc, flags, x, y);
+    let mut f = gather_node_in(shape, src, layout, bc, &domain.profiles, flags, x, y);
     fluid_collide(
         &mut f,
         collision,
@@ -491,7 +554,8 @@ pub fn fix_special_nodes<T: Real>(
 }
 
 /// Nodes covered by moving solids, in compressed-row form: node `nodes[k]` is covered by the shares
-/// `shares[offsets[k] as usize .. offsets[k + 1] as usize]`.
+/// `shares[offsets[k] as usize .. offsets[k + 1] as usize]`, and its links to nodes that are not fully covered
+/// are `links[k]` (read by the ΩΛ operator only; see [`OpenLinks`]).
 #[derive(Clone, Copy, Debug)]
 pub struct CoveredNodes<'a, T> {
     /// Covered node indices, increasing.
@@ -500,11 +564,13 @@ pub struct CoveredNodes<'a, T> {
     pub offsets: &'a [u32],
     /// Every share of the lattice.
     pub shares: &'a [SolidShare<T>],
+    /// Open links of each covered node (same length as `nodes`).
+    pub links: &'a [OpenLinks],
 }
 
 /// The new post-collision populations of covered node `n` from `src` in `layout`: the general gather and the
-/// partially-saturated collision with `shares`, the momentum handed to each share written to `exchange`. A
-/// covered solid obstacle node is left alone (`None`, zero exchange).
+/// partially-saturated collision with `shares` (and the node's open links `open`), the momentum handed to each
+/// share written to `exchange`. A covered solid obstacle node is left alone (`None`, zero exchange).
 #[inline]
 #[allow(clippy::too_many_arguments)]
 pub fn covered_node_value<T: Real>(
@@ -514,6 +580,7 @@ pub fn covered_node_value<T: Real>(
     params: &PsmParams<T>,
     n: usize,
     shares: &[SolidShare<T>],
+    open: OpenLinks,
     exchange: &mut [[T; 2]],
 ) -> Option<[T; Q]> {
     let (shape, bc, flags) = (&domain.shape, &domain.bc, domain.flags);
@@ -524,8 +591,8 @@ pub fn covered_node_value<T: Real>(
         return None;
     }
     let (x, y) = shape.coords(n);
-    let mut f = gather_node_in(shape, src, layout, bc, flags, x, y);
-    psm_collide(&mut f, params, shares, exchange);
+    let mut f = gather_node_in(shape, src, layout, bc, &domain.profiles, flags, x, y);
+    psm_collide_links(&mut f, params, shares, open, exchange);
     Some(f)
 }
 
@@ -548,7 +615,10 @@ pub fn collide_covered_nodes<T: Real>(
         let (a, b) = (covered.offsets[k] as usize, covered.offsets[k + 1] as usize);
         let ex = &mut exchange[a - first..b - first];
         let shares = &covered.shares[a..b];
-        if let Some(f) = covered_node_value(domain, src, Layout::Collided, params, n, shares, ex) {
+        let open = covered.links[k];
+        if let Some(f) =
+            covered_node_value(domain, src, Layout::Collided, params, n, shares, open, ex)
+        {
             for q in 0..Q {
                 dst[q][n - base] = f[q];
             }
@@ -617,4 +687,28 @@ pub fn nodes_in_rows<'a>(
     let lo = nodes.partition_point(|&n| n < a);
     let hi = nodes.partition_point(|&n| n < b);
     &nodes[lo..hi]
+}
+
+/// The open links ([`OpenLinks`]) of node (x, y): bit i set when the neighbour x + c_i is inside the lattice
+/// (periodic wrap where the axis is periodic), not a solid obstacle node and not fully covered by the moving
+/// solids (`full(j)` false). Neighbours outside the lattice lie behind a wall (a covered node is never on a
+/// Zou–He side), so their links are closed.
+pub fn open_links<T: Real>(
+    shape: &LatticeShape,
+    bc: &Boundaries<T>,
+    flags: &[u8],
+    x: usize,
+    y: usize,
+    full: impl Fn(usize) -> bool,
+) -> OpenLinks {
+    let periodic = bc.periodic_axes();
+    let mut open: OpenLinks = 0;
+    for q in 1..Q {
+        if let Neighbour::Node(j) = shape.neighbour(x, y, q, periodic) {
+            if flags[j] != SOLID && !full(j) {
+                open |= 1 << q;
+            }
+        }
+    }
+    open
 }

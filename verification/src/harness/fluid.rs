@@ -16,8 +16,10 @@ use crate::{Chooser, INTERESTING_F64};
 use lbdem_kernels::fluid::aa::{
     local_row, plane_row, post_collision_offset, scatter_row, AaStep, Layout,
 };
-use lbdem_kernels::fluid::boundary::{Boundaries, SideCondition};
-use lbdem_kernels::fluid::collide::{Collision, PsmParams, SolidOperator, SolidShare, Weighting};
+use lbdem_kernels::fluid::boundary::{Boundaries, SideCondition, SideProfiles};
+use lbdem_kernels::fluid::collide::{
+    Collision, PsmParams, SolidOperator, SolidShare, Weighting, ALL_LINKS_OPEN,
+};
 use lbdem_kernels::fluid::d2q9::equilibrium;
 use lbdem_kernels::fluid::d2q9::{OPPOSITE, Q, VELOCITIES};
 use lbdem_kernels::fluid::lattice::{LatticeShape, Neighbour, ShapeError, Side};
@@ -411,6 +413,7 @@ pub fn fix_passes_in_bounds(c: &mut dyn Chooser, max: usize) {
     let domain = Domain {
         shape,
         bc,
+        profiles: SideProfiles::none(),
         flags: &flags,
     };
     let mut special = vec![u32::MAX; shape.nodes()];
@@ -442,6 +445,7 @@ pub fn fix_passes_in_bounds(c: &mut dyn Chooser, max: usize) {
     }
     let nodes: Vec<u32> = (0..shape.nodes() as u32).collect();
     let offsets: Vec<u32> = (0..=shape.nodes() as u32).collect();
+    let links = vec![ALL_LINKS_OPEN; shape.nodes()];
     let shares = vec![
         SolidShare {
             fraction: 0.5,
@@ -480,6 +484,7 @@ pub fn fix_passes_in_bounds(c: &mut dyn Chooser, max: usize) {
             nodes: &nodes[lo..hi],
             offsets: &offsets[lo..=hi],
             shares: &shares,
+            links: &links[lo..hi],
         };
         collide_covered_nodes(
             &domain,

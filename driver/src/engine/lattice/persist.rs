@@ -1,8 +1,9 @@
 //! Checkpoints of a [`FluidLattice`] (serde): shape, side conditions, collision parameters, node flags, the
 //! current populations (every plane in full, padding included), the step counter, the PSM coverage (covered
 //! nodes, shares, owners, the momentum exchanged at the last step, the weighting), the solid operator and the
-//! fluid collision (BGK, or TRT with its magic parameter, checked again on load). The
-//! special-node list is derived from the flags and rebuilt. The populations are saved in the two-lattice layout
+//! fluid collision (BGK, or TRT with its magic parameter, checked again on load) and the velocity profiles of
+//! profile sides (checked again on load). The special-node list and ΩΛ's open-link masks are derived from the
+//! flags and the coverage and rebuilt. The populations are saved in the two-lattice layout
 //! whatever the streaming scheme and step parity (see [`FluidLattice::populations`]), and a loaded lattice starts
 //! from that layout with the default scheme (a run sets its own afterwards): either continues bitwise as the
 //! saved run would have. The two-lattice scheme's second buffer is scratch (every node of it is rewritten by the
@@ -32,6 +33,7 @@ struct Record<'a, T: Real> {
     solid_operator: SolidOperator,
     collision: Collision<T>,
     coverage: Option<Cow<'a, Coverage<T>>>,
+    profiles: Cow<'a, [Vec<[T; 2]>; 4]>,
 }
 
 impl<T: Real + Serialize> Serialize for FluidLattice<T> {
@@ -47,6 +49,7 @@ impl<T: Real + Serialize> Serialize for FluidLattice<T> {
             solid_operator: self.solid_operator,
             collision: self.collision,
             coverage: self.coverage.as_ref().map(Cow::Borrowed),
+            profiles: Cow::Borrowed(&self.profiles),
         }
         .serialize(s)
     }
@@ -99,7 +102,23 @@ impl<'de, T: Real + Deserialize<'de>> Deserialize<'de> for FluidLattice<T> {
                 ));
             }
             lattice.coverage = Some(c);
+            lattice.refresh_links();
         }
+        let profiles = r.profiles.into_owned();
+        for (k, p) in profiles.iter().enumerate() {
+            if p.len() != lattice.profiles[k].len() {
+                return Err(D::Error::custom(format!(
+                    "side profile {k} (west, east, south, north) of {} values for a {nx} x {ny} lattice \
+                     that expects {}",
+                    p.len(),
+                    lattice.profiles[k].len()
+                )));
+            }
+        }
+        super::side_profiles(&profiles)
+            .validate(&lattice.bc, nx, ny)
+            .map_err(|e| D::Error::custom(format!("side profiles refused: {e:?}")))?;
+        lattice.profiles = profiles;
         Ok(lattice)
     }
 }

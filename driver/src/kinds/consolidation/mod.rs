@@ -147,7 +147,7 @@ fn start(case: &Case<Consolidation>, exec: &Exec) -> Result<ConsolidationState> 
         },
     )?;
     exec.apply(&mut fluid);
-    fluid.set_solid_operator(SolidOperator::LinearizedBounceBack);
+    fluid.set_solid_operator(SolidOperator::LinearizedNonEquilibriumBounceBack);
     let map = LatticeMap::of(u, [lo[0] - 0.5 * h, lo[1] - 0.5 * h]);
     let mut world = CoupledWorld::new(
         fluid,

@@ -160,7 +160,7 @@ impl CompressibilityState {
             },
         )?;
         exec.apply(&mut fluid);
-        fluid.set_solid_operator(SolidOperator::BounceBack);
+        fluid.set_solid_operator(SolidOperator::MovingWallBounceBack);
         // The piston: an ellipse 2b = 3 nodes thick with its major axis along y, 50 × the box height long, so
         // its faces are flat to (H/2)²/(2a) · b/a ≈ 1e-5 nodes across the box. Fluid fills the chamber behind
         // it.

@@ -91,7 +91,7 @@ fn default_margin() -> f64 {
     0.3
 }
 fn default_operator() -> SolidOperator {
-    SolidOperator::LinearizedBounceBack
+    SolidOperator::LinearizedNonEquilibriumBounceBack
 }
 
 /// `[loading]` of a fracture scene (ch. 6.6).

@@ -207,7 +207,7 @@ fn start(case: &Case<PressureDiffusion>, exec: &Exec) -> Result<DiffusionState> 
             },
         )?;
         exec.apply(&mut f);
-        f.set_solid_operator(SolidOperator::BounceBack);
+        f.set_solid_operator(SolidOperator::MovingWallBounceBack);
         f.cover_with_bodies(&bodies, wf);
         Ok(f)
     };

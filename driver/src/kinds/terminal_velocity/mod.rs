@@ -365,7 +365,7 @@ impl Kind for TerminalVelocity {
                 "refine fluid.spacing or enlarge the box",
             ));
         }
-        if t.solid_operator == SolidOperator::BounceBack {
+        if t.solid_operator == SolidOperator::MovingWallBounceBack {
             return Err(LbdemError::field(
                 "terminal_velocity.solid_operator",
                 "moving_wall",

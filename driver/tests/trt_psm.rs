@@ -1,0 +1,131 @@
+//! Acceptance of the τ-independent partially saturated method (issue 11 items 2–3): TRT (Λ = 3/16) with the
+//! ΩΛ solid operator and B = ε, on the periodic square array of cylinders against Sangani & Acrivos (1982)
+//! and on a random pack of 100 discs, at τ ∈ {0.55, 0.6, 0.8, 1.2, 2.0}.
+//!
+//! Fast variants run here; the full l = 40 grid over every τ and c is `#[ignore]`d (and printed, with every
+//! other operator next to it, by `cargo run --release -p lbdem --example tau_table`).
+#[path = "common/psm_cases.rs"]
+mod psm_cases;
+
+use lbdem_kernels::fluid::collide::Weighting;
+use psm_cases::{pack_permeability, random_pack, square_array, Method, TAUS};
+
+/// The spread (max − min) of a list.
+fn spread(v: &[f64]) -> f64 {
+    let lo = v.iter().cloned().fold(f64::INFINITY, f64::min);
+    let hi = v.iter().cloned().fold(f64::NEG_INFINITY, f64::max);
+    hi - lo
+}
+
+/// Drag errors of the square array at every τ of the table.
+fn errors(cell: usize, c: f64, method: Method) -> Vec<f64> {
+    TAUS.iter()
+        .map(|&tau| {
+            let r = square_array(cell, c, tau, method);
+            assert!(r.steady, "l = {cell}, c = {c}, τ = {tau}: not steady");
+            // The solid receives the body force of the fluid, G Σ (1 − B) ≥ G (1 − c) l² (B ≤ 1 ... = ε here):
+            // exactly 1 − c with B = ε, to the steady tolerance.
+            assert!(
+                (r.solid_force_ratio - (1.0 - c)).abs() < 1e-6,
+                "force ratio {}",
+                r.solid_force_ratio
+            );
+            r.error
+        })
+        .collect()
+}
+
+#[test]
+fn square_array_drag_is_within_two_percent_at_l20_and_the_same_at_every_tau() {
+    for c in [0.2, 0.4] {
+        let e = errors(20, c, Method::LAMBDA);
+        eprintln!(
+            "l = 20, c = {c}: {:?} %",
+            e.iter().map(|x| 100.0 * x).collect::<Vec<_>>()
+        );
+        // Issue 11: within 2 % of S&A at l = 20 for c ≤ 0.4 (measured −1.88 % and −1.29 %; REFERENCE §1.5 puts
+        // ≈ 5 gap nodes at the ≈ 5 % level for BGK-PSM).
+        for (tau, err) in TAUS.iter().zip(&e) {
+            assert!(
+                err.abs() <= 0.02,
+                "c = {c}, τ = {tau}: {:+.2} %",
+                100.0 * err
+            );
+        }
+        // τ-independence: the steady TRT solution depends on τ only through ν and Λ; what remains is the
+        // O(Re², δρ) part of a Stokes flow at Re ≤ 0.01, δρ ≤ 1e-5, and the 1e-9 steady tolerance: measured
+        // spread < 1e-7. 2e-5 leaves room and is 700 times below the issue's smallest BGK spread (1.4 %).
+        assert!(spread(&e) < 2e-5, "c = {c}: spread {:.3e}", spread(&e));
+    }
+}
+
+#[test]
+fn square_array_drag_is_within_one_percent_at_l40() {
+    // The l = 40 column of the issue at one τ (the spread over τ is asserted at l = 20 above and over the whole
+    // grid in the ignored test below). Measured +0.11 / +0.86 / −0.18 %.
+    for c in [0.2, 0.4, 0.6] {
+        let r = square_array(40, c, 0.8, Method::LAMBDA);
+        assert!(r.steady);
+        eprintln!("l = 40, c = {c}: {:+.3} %", 100.0 * r.error);
+        assert!(r.error.abs() <= 0.01, "c = {c}: {:+.2} %", 100.0 * r.error);
+    }
+}
+
+#[test]
+#[ignore = "full grid: 15 runs at l = 40 (about a minute in release)"]
+fn square_array_drag_is_within_one_percent_at_l40_for_every_tau() {
+    for c in [0.2, 0.4, 0.6] {
+        let e = errors(40, c, Method::LAMBDA);
+        eprintln!(
+            "l = 40, c = {c}: {:?} %",
+            e.iter().map(|x| 100.0 * x).collect::<Vec<_>>()
+        );
+        for (tau, err) in TAUS.iter().zip(&e) {
+            assert!(
+                err.abs() <= 0.01,
+                "c = {c}, τ = {tau}: {:+.2} %",
+                100.0 * err
+            );
+        }
+        assert!(spread(&e) < 2e-5, "c = {c}: spread {:.3e}", spread(&e));
+    }
+}
+
+#[test]
+fn the_noble_torczynski_weighting_is_tau_independent_too() {
+    // ΩΛ with B₂ in its Λ form (τ − ½ → √Λ) is τ-independent as well; it under-weights partly covered cells
+    // (its friction already carries B₂'s (τ − ½)), so its drag is lower (−8.8 % here): B = ε is ΩΛ's weighting.
+    let m = Method {
+        weighting: Weighting::NobleTorczynski,
+        ..Method::LAMBDA
+    };
+    let e: Vec<f64> = TAUS
+        .iter()
+        .map(|&tau| square_array(20, 0.2, tau, m).error)
+        .collect();
+    assert!(spread(&e) < 2e-5, "spread {:.3e}", spread(&e));
+}
+
+#[test]
+fn random_pack_permeability_is_the_same_at_every_tau() {
+    // 100 discs of diameter 5 at least 1 node apart in a periodic 80 × 80 box (porosity ≈ 0.69).
+    let (size, d) = (80, 5.0);
+    let discs = random_pack(100, d, size, 1.0, 7);
+    let runs: Vec<(f64, f64)> = TAUS
+        .iter()
+        .map(|&tau| {
+            let (k, porosity, steady, steps) = pack_permeability(&discs, size, tau, Method::LAMBDA);
+            assert!(steady, "τ = {tau}: not steady after {steps} steps");
+            eprintln!(
+                "τ = {tau}: k = {k:.6e} (k/D² = {:.5}), porosity {porosity:.4}, {steps} steps",
+                k / (d * d)
+            );
+            (k, porosity)
+        })
+        .collect();
+    let k: Vec<f64> = runs.iter().map(|r| r.0).collect();
+    let mean = k.iter().sum::<f64>() / k.len() as f64;
+    // Issue 11: permeability varies by < 1 % over the τ set. Measured spread 7e-7 relative (Stokes flow at
+    // Re ≤ 0.01, δρ ≤ 1e-5, steady to 1e-8 per 200 steps); 2e-5 leaves room for the steady tolerance.
+    assert!(spread(&k) / mean < 2e-5, "permeabilities {k:?}");
+}
