@@ -62,10 +62,7 @@ pub struct Case<K: Kind> {
 impl<K: Kind> Case<K> {
     /// Parse scene text (`path` for messages), range-check it and derive its set-up.
     pub fn read(text: &str, path: &str) -> Result<Self> {
-        let scene: K::Scene = toml::from_str(text).map_err(|e| LbdemError::ParseScene {
-            path: path.to_string(),
-            message: e.to_string(),
-        })?;
+        let scene: K::Scene = crate::input::parse::parse_scene(text, path)?;
         Self::new(scene)
     }
 

@@ -29,6 +29,8 @@ use crate::run::interval::CheckpointInterval;
 
 pub mod solid;
 
+pub use crate::input::limits;
+
 pub use crate::units::{FluidSection, UnitLabels, UnitSystem};
 
 /// Floating-point precision of the kernels.
@@ -212,24 +214,4 @@ pub(crate) fn whole_spacings(field: &str, length: f64, h: f64) -> Result<usize> 
     Ok(n as usize)
 }
 
-/// Read a scene file; the error names the path.
-pub fn read_scene_text(path: &std::path::Path) -> Result<String> {
-    std::fs::read_to_string(path).map_err(|e| LbdemError::ReadScene {
-        path: path.display().to_string(),
-        source: e,
-    })
-}
-
-/// The `[scene] kind` of a scene's TOML text as `K` (a kind enum, or `String`); `None` if the header does not
-/// parse as `K` (the scene's own parser then reports the problem).
-pub fn peek_kind<K: serde::de::DeserializeOwned>(text: &str) -> Option<K> {
-    #[derive(Deserialize)]
-    struct Header<K> {
-        scene: KindField<K>,
-    }
-    #[derive(Deserialize)]
-    struct KindField<K> {
-        kind: K,
-    }
-    toml::from_str::<Header<K>>(text).ok().map(|h| h.scene.kind)
-}
+pub use crate::input::parse::{kind_field, parse_scene, peek_kind, read_scene_text, KindField};

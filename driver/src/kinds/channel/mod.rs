@@ -74,10 +74,7 @@ pub struct ChannelScene {
 impl ChannelScene {
     /// Parse a channel scene from TOML text (`path` for messages; ranges are checked by [`ChannelSetup::new`]).
     pub fn from_toml(text: &str, path: &str) -> Result<Self> {
-        toml::from_str(text).map_err(|e| LbdemError::ParseScene {
-            path: path.to_string(),
-            message: e.to_string(),
-        })
+        crate::scene::parse_scene(text, path)
     }
 }
 

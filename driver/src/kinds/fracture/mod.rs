@@ -227,10 +227,7 @@ pub struct FluidSetup {
 impl FractureScene {
     /// Parse from TOML text and check ranges (`path` for messages).
     pub fn from_toml(text: &str, path: &str) -> Result<Self> {
-        let s: FractureScene = toml::from_str(text).map_err(|e| LbdemError::ParseScene {
-            path: path.to_string(),
-            message: e.to_string(),
-        })?;
+        let s: FractureScene = crate::scene::parse_scene(text, path)?;
         s.validate()?;
         Ok(s)
     }
@@ -1519,7 +1516,10 @@ pub fn compare_breaks(dirs: &[std::path::PathBuf], out: &Path) -> Result<()> {
     let mut series = Vec::new();
     for dir in dirs {
         let path = dir.join("history.csv");
-        let text = crate::scene::read_scene_text(&path)?;
+        let text = std::fs::read_to_string(&path).map_err(|e| LbdemError::ReadScene {
+            path: path.display().to_string(),
+            source: e,
+        })?;
         let mut lines = text.lines();
         let header: Vec<&str> = lines.next().unwrap_or_default().split(',').collect();
         let (Some(t), Some(b)) = (
