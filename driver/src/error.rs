@@ -152,9 +152,16 @@ pub fn cut(text: &str, max: usize) -> String {
 impl LbdemError {
     /// Shorthand for [`LbdemError::InvalidField`]; the value is quoted cut to [`QUOTE_CHARS`] characters.
     pub fn field(field: &str, value: impl ToString, problem: &str, hint: &str) -> Self {
+        let mut value = value.to_string();
+        // A huge float prints as hundreds of digits: show it in scientific notation.
+        if value.len() > 24 {
+            if let Ok(x) = value.parse::<f64>() {
+                value = format!("{x:e}");
+            }
+        }
         Self::InvalidField {
             field: cut(field, QUOTE_CHARS),
-            value: cut(&value.to_string(), QUOTE_CHARS),
+            value: cut(&value, QUOTE_CHARS),
             problem: problem.to_string(),
             hint: hint.to_string(),
         }

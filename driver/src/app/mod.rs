@@ -136,5 +136,25 @@ pub fn resume(dir: &Path, opts: &RunOptions) -> Result<serde_json::Value> {
         ),
         hint: "resume it with the lbdem version that wrote it".into(),
     })?;
+    // The scene copy must be of the checkpoint's kind: say so rather than parse it as the wrong kind.
+    let copy = dir.join(crate::output::SCENE_COPY);
+    if let Ok(text) = std::fs::read_to_string(&copy) {
+        if let Ok(crate::scene::KindField::Name(kind)) = kind_field(&text) {
+            if kind != header.kind {
+                return Err(LbdemError::Checkpoint {
+                    path: path.display().to_string(),
+                    problem: format!(
+                        "checkpoint kind does not match: it was written by a `{}` run, but {} is a `{kind}` \
+                         scene",
+                        header.kind,
+                        copy.display()
+                    ),
+                    hint: "the checkpoint and scene.toml come from different runs; restore the scene.toml of \
+                           the run that wrote the checkpoint, or start a new run"
+                        .into(),
+                });
+            }
+        }
+    }
     (entry.resume)(dir, opts)
 }

@@ -25,6 +25,55 @@ pub const MAX_CASES: u64 = 10_000;
 /// Most snapshot files (VTK, PNG) one run may write: 10⁴ per kind of file.
 pub const MAX_SNAPSHOTS: u64 = 10_000;
 
+/// Most lattice nodes along one side: 2³² − 1, as the kernels index nodes in 32 bits (so any side count below
+/// it squares without overflowing 64 bits; the node count itself is checked by [`lattice`]).
+pub const MAX_SIDE: u64 = u32::MAX as u64;
+
+/// The refusal of a length of `n` lattice spacings (above [`MAX_SIDE`]), naming `field`.
+pub fn side_too_long(field: &str, length: f64, n: f64) -> LbdemError {
+    LbdemError::field(
+        field,
+        length,
+        &format!("is {n:e} lattice spacings long, above the {MAX_SIDE} nodes a side may have"),
+        "shrink the domain or coarsen fluid.spacing",
+    )
+}
+
+/// Most grains (DEM particles) one run may hold: 10⁸ (the DEM world indexes grains in 32 bits, and at
+/// [`GRAIN_BYTES`] each 10⁸ grains already take about 100 GB).
+pub const MAX_GRAINS: u64 = 100_000_000;
+
+/// Refuse more than [`MAX_GRAINS`] grains, naming `field`.
+pub fn grains(field: &str, n: u64) -> Result<u64> {
+    if n > MAX_GRAINS {
+        return Err(LbdemError::field(
+            field,
+            format!("(gives {n} grains)"),
+            &format!("gives {n} grains, above the limit of {MAX_GRAINS} per run"),
+            "shrink the sample or use larger grains",
+        ));
+    }
+    Ok(n)
+}
+
+/// Refuse more than [`MAX_SUBSTEPS`] DEM sub-steps per fluid step, naming `field` (the sub-step count is
+/// Δt_fluid / (safety × DEM critical step)).
+pub fn substeps(field: &str, n: f64) -> Result<u64> {
+    let n = count_up(field, "the DEM sub-steps per fluid step", n)?;
+    if n > MAX_SUBSTEPS {
+        return Err(LbdemError::field(
+            field,
+            format!("(gives {n} DEM sub-steps per fluid step)"),
+            &format!(
+                "makes the grains so stiff that each fluid step needs {n} DEM sub-steps, above the limit of \
+                 {MAX_SUBSTEPS}"
+            ),
+            "lower the stiffness, raise the grain density or size, or shorten fluid.timestep",
+        ));
+    }
+    Ok(n.max(1))
+}
+
 /// Largest scene file read: 1 MiB. Scene files hold parameters, not data; reading stops here, so neither a
 /// huge file nor an endless one (`/dev/zero`) is read into memory.
 pub const MAX_SCENE_BYTES: u64 = 1 << 20;
@@ -70,6 +119,8 @@ pub struct Part {
 pub struct Budget {
     /// The parts.
     pub parts: Vec<Part>,
+    /// Derived figures behind the limits, printed by `lbdem check` (e.g. the DEM sub-steps per fluid step).
+    pub notes: Vec<String>,
 }
 
 /// Bytes for humans.
@@ -177,13 +228,20 @@ impl Budget {
             .join("; ")
     }
 
-    /// One line for `lbdem check`.
+    /// Add a note printed by `lbdem check`.
+    pub fn note(&mut self, note: impl Into<String>) {
+        self.notes.push(note.into());
+    }
+
+    /// The lines for `lbdem check`: the notes and the memory estimate.
     pub fn describe(&self) -> String {
-        format!(
+        let mut s: String = self.notes.iter().map(|n| format!("  {n}\n")).collect();
+        s += &format!(
             "  memory: about {} ({})\n",
             human(self.bytes()),
             self.summary()
-        )
+        );
+        s
     }
 }
 

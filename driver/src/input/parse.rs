@@ -64,6 +64,10 @@ pub fn parse_error(
     // "missing field `x`" points at the table that lacks it: name the field itself.
     if let Some(missing) = backticked(raw, "missing field `") {
         key = join(&key, &missing);
+    } else if let Some(child) = child_at_fault(text, &key, raw) {
+        // A table deserialized as a whole (an internally tagged enum such as `[solid.bonds]`) reports its
+        // errors at the table: name the key inside it whose value or name the error quotes.
+        key = join(&key, &child);
     }
     let mut message = String::new();
     if !key.is_empty() {
@@ -178,6 +182,93 @@ fn search_value(
             }
         }
         _ => {}
+    }
+}
+
+/// A value quoted by a serde error message.
+enum Literal {
+    Str(String),
+    Bool(bool),
+    Num(f64),
+}
+
+/// When the key path `key` of an error names a table, the key inside that table (relative dotted path) the
+/// message `raw` is about: "unknown field `x`", or "invalid type/value: <kind> <literal>" matched against the
+/// values in the table. `None` when `key` is not a table or nothing matches.
+fn child_at_fault(text: &str, key: &str, raw: &str) -> Option<String> {
+    let doc = DeTable::parse(text).ok()?;
+    let mut table = doc.get_ref();
+    if !key.is_empty() {
+        for part in key.split('.') {
+            let (name, index) = match part.split_once('[') {
+                Some((n, i)) => (n, i.trim_end_matches(']').parse::<usize>().ok()),
+                None => (part, None),
+            };
+            let mut v = table.get(name)?.get_ref();
+            if let Some(i) = index {
+                v = match v {
+                    DeValue::Array(a) => a.get(i)?.get_ref(),
+                    _ => return None,
+                };
+            }
+            table = match v {
+                DeValue::Table(t) => t,
+                _ => return None,
+            };
+        }
+    }
+    if let Some(name) = backticked(raw, "unknown field `") {
+        return table
+            .iter()
+            .any(|(k, _)| *k.get_ref() == name)
+            .then_some(name);
+    }
+    let rest = raw
+        .strip_prefix("invalid type: ")
+        .or_else(|| raw.strip_prefix("invalid value: "))?;
+    let literal = if let Some(r) = rest.strip_prefix("string \"") {
+        Literal::Str(r[..r.rfind("\", expected")?].to_string())
+    } else {
+        let l = backticked(rest, "`")?;
+        match l.parse::<bool>() {
+            Ok(b) => Literal::Bool(b),
+            Err(_) => Literal::Num(l.parse::<f64>().ok()?),
+        }
+    };
+    let mut found = None;
+    find_value(text, table, "", &literal, &mut found);
+    found
+}
+
+/// The first key of `table` (recursively, dotted relative path) whose value is `literal`.
+fn find_value(
+    text: &str,
+    table: &DeTable<'_>,
+    prefix: &str,
+    literal: &Literal,
+    found: &mut Option<String>,
+) {
+    for (k, v) in table.iter() {
+        if found.is_some() {
+            return;
+        }
+        let path = join(prefix, k.get_ref());
+        let source = text.get(v.span()).unwrap_or_default().replace('_', "");
+        let hit = match (v.get_ref(), literal) {
+            (DeValue::String(s), Literal::Str(l)) => s.as_ref() == l.as_str(),
+            (DeValue::Boolean(b), Literal::Bool(l)) => b == l,
+            (DeValue::Integer(_) | DeValue::Float(_), Literal::Num(l)) => {
+                source.trim().parse::<f64>().is_ok_and(|x| x == *l)
+            }
+            (DeValue::Table(t), _) => {
+                find_value(text, t, &path, literal, found);
+                false
+            }
+            _ => false,
+        };
+        if hit {
+            *found = Some(path);
+        }
     }
 }
 

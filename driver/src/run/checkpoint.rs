@@ -15,7 +15,7 @@
 //! | 32 | SHA-256 of the scene file text the run started from |
 //! | 8 | step (u64) the state is at |
 //! | 8 | payload length (u64) |
-//! | 32 | SHA-256 of the payload |
+//! | 32 | SHA-256 of everything before this field followed by the payload: the whole file is under the checksum |
 //! | … | payload: the state in [`postcard`] encoding (serde; floats as their raw IEEE-754 bytes) |
 //!
 //! A truncated, corrupted, foreign or
@@ -52,7 +52,9 @@ pub use crate::output::{CHECKPOINT_FILE, DIVERGED_FILE, SCENE_COPY};
 pub const MAGIC: [u8; 8] = *b"LBDEMCKP";
 /// Version of the layout; bumped whenever the header or the payload encoding changes. Version 1 (hand-written
 /// payloads) was replaced by version 2 (serde + postcard payloads).
-pub const FORMAT_VERSION: u32 = 2;
+/// Version 3 put the header under the checksum (version 2 covered the payload only, so an edited step or
+/// kind tag went unnoticed).
+pub const FORMAT_VERSION: u32 = 3;
 /// SHA-256 of a scene text (stored in the header, checked on resume).
 pub fn scene_hash(text: &str) -> [u8; 32] {
     Sha256::digest(text.as_bytes()).into()
@@ -139,7 +141,8 @@ impl Checkpoint {
         out.extend_from_slice(&scene_hash(scene_text));
         out.extend_from_slice(&step.to_le_bytes());
         out.extend_from_slice(&(payload.len() as u64).to_le_bytes());
-        out.extend_from_slice(&Sha256::digest(&payload));
+        let digest = digest(&out, &payload);
+        out.extend_from_slice(&digest);
         out.extend_from_slice(&payload);
         out
     }
@@ -267,6 +270,14 @@ impl<'a> Cursor<'a> {
     }
 }
 
+/// The checksum of a checkpoint: SHA-256 of the header bytes before it, then the payload.
+fn digest(header: &[u8], payload: &[u8]) -> [u8; 32] {
+    let mut h = Sha256::new();
+    h.update(header);
+    h.update(payload);
+    h.finalize().into()
+}
+
 fn parse(bytes: &[u8]) -> Result<(CheckpointHeader, &[u8])> {
     let mut d = Cursor { buf: bytes, pos: 0 };
     let not_ours = || LbdemError::Checkpoint {
@@ -305,7 +316,8 @@ fn parse(bytes: &[u8]) -> Result<(CheckpointHeader, &[u8])> {
     let scene_hash: [u8; 32] = d.array()?;
     let step = d.u64()?;
     let len = d.u64()?;
-    let digest: [u8; 32] = d.array()?;
+    let header_bytes = &bytes[..d.pos];
+    let stored: [u8; 32] = d.array()?;
     let payload = &bytes[d.pos..];
     if payload.len() as u64 != len {
         return Err(corrupt(format!(
@@ -313,10 +325,11 @@ fn parse(bytes: &[u8]) -> Result<(CheckpointHeader, &[u8])> {
             payload.len()
         )));
     }
-    let actual: [u8; 32] = Sha256::digest(payload).into();
-    if actual != digest {
+    if digest(header_bytes, payload) != stored {
         return Err(corrupt(
-            "payload checksum (SHA-256) does not match: the file is corrupted".into(),
+            "checksum (SHA-256 of the header and the payload) does not match: the file is corrupted or \
+             was edited"
+                .into(),
         ));
     }
     Ok((

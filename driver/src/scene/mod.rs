@@ -44,6 +44,16 @@ pub enum Precision {
     F64,
 }
 
+impl Precision {
+    /// Bytes per float.
+    pub fn float_bytes(self) -> u64 {
+        match self {
+            Precision::F32 => 4,
+            Precision::F64 => 8,
+        }
+    }
+}
+
 /// `[scene]`: what is simulated, in which units and precision.
 #[derive(Clone, Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
@@ -144,12 +154,13 @@ impl RunSection {
         Ok(())
     }
 
-    /// Steps to run (an upper bound when a steady tolerance is set), from `steps` or `duration` / Δt.
-    pub fn step_count(&self, timestep: f64) -> u64 {
+    /// Steps to run (an upper bound when a steady tolerance is set), from `steps` or `duration` / Δt, refused
+    /// naming the field above [`limits::MAX_STEPS`].
+    pub fn step_count(&self, timestep: f64) -> Result<u64> {
         match (self.steps, self.duration) {
-            (Some(s), _) => s,
-            (None, Some(d)) => (d / timestep).ceil().max(1.0) as u64,
-            _ => 1,
+            (Some(s), _) => limits::steps("run.steps", s),
+            (None, Some(d)) => limits::steps_for("run.duration", d, timestep, true),
+            _ => Ok(1),
         }
     }
 }
@@ -197,6 +208,9 @@ impl UnitsSetup {
 /// The number of lattice spacings in `length` when it is a positive whole number of them (within 1 %).
 pub(crate) fn whole_spacings(field: &str, length: f64, h: f64) -> Result<usize> {
     let n = (length / h).round();
+    if n > limits::MAX_SIDE as f64 {
+        return Err(limits::side_too_long(field, length, n));
+    }
     if !(length.is_finite() && length > 0.0) || n < 1.0 || (n * h - length).abs() > 0.01 * h {
         return Err(LbdemError::field(
             field,

@@ -40,6 +40,7 @@ use crate::engine::dem::world::{DemWorld, PlatenControl, SampleBox, CRITICAL_STE
 use crate::engine::exec::Exec;
 use crate::engine::lattice::FluidLattice;
 use crate::error::{positive, LbdemError, Result};
+use crate::input::limits::{self, Budget, GRAIN_BYTES};
 use crate::observe::darcy::{permeability, SteadyFlow};
 use crate::observe::fit::fit_diffusivity;
 use crate::observe::health::dem_health;
@@ -47,6 +48,7 @@ use crate::observe::steady::Steadiness;
 use crate::output::vtk::{bonds_vtk, lattice_vtk, particles_vtk, Field};
 use crate::output::{csv, write_atomic, SCENE_COPY};
 use crate::run::{Case, CheckpointInterval, Kind, OutputStage, Persist};
+use crate::scene::solid::grain_count;
 use crate::scene::solid::{
     bond_spec, critical_time_step, packing_spec, validate_packing_and_solid, PackingSection,
     SolidSection,
@@ -1386,12 +1388,33 @@ pub struct FractureTest;
 
 impl Kind for FractureTest {
     const NAME: &'static str = "fracture";
+    const NOT_MEASURED: &'static [&'static str] = &[
+        "fluid",
+        "permeability",
+        "final_axial_strain",
+        "final_lateral_strain",
+        "crack_plane_mean_deg",
+        "crack_plane_deviation_from_perpendicular_to_sigma3_deg",
+        "fracture_trace_mean_deg",
+        "fracture_trace_deviation_from_perpendicular_to_sigma3_deg",
+    ];
     type Scene = FractureScene;
     type Setup = FractureSetup;
     type State = FractureState;
 
     fn validate(scene: &FractureScene) -> Result<()> {
         scene.validate()
+    }
+
+    fn budget(scene: &FractureScene, _setup: &FractureSetup) -> Result<Budget> {
+        let mut b = Budget::new();
+        b.add_items(
+            "grains",
+            "packing.width",
+            grain_count(&scene.packing)?,
+            GRAIN_BYTES,
+        )?;
+        Ok(b)
     }
 
     fn setup(scene: &FractureScene) -> Result<FractureSetup> {
@@ -1404,7 +1427,7 @@ impl Kind for FractureTest {
         Ok(FractureSetup {
             critical_time_step: critical,
             timestep: dt,
-            steps: (scene.loading.duration / dt).round().max(1.0) as u64,
+            steps: limits::steps_for("loading.duration", scene.loading.duration, dt, false)?,
             fluid,
             warnings: warnings.0,
         })
@@ -1481,11 +1504,9 @@ impl Kind for FractureTest {
         case: &Case<Self>,
         state: &FractureState,
         dir: &Path,
-        stage: OutputStage,
+        _stage: OutputStage,
     ) -> Result<()> {
-        if stage == OutputStage::Checkpoint {
-            return Ok(());
-        }
+        // Periodic checkpoints flush the tables too, so that a killed run keeps its records so far.
         FractureRun {
             scene: &case.scene,
             state,
