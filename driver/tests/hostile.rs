@@ -119,6 +119,16 @@ fn sizes_that_panicked_aborted_or_hung_are_refused_by_check_and_run_naming_the_f
 }
 
 #[test]
+fn fuzzer_findings_are_refused_naming_the_field() {
+    // A fluid margin of 1e300 in a fracture scene overflowed the lattice size (`attempt to add with
+    // overflow`), found by the fuzzer at 5000 cases.
+    let base = scene("fracture/base.toml");
+    refused_by_both(&with(&base, "margin", "1e300"), "fluid.spacing");
+    // A settling time of 1e300 s: ~1e307 settling steps (a loop without end).
+    refused_by_both(&with(&base, "settle_time", "1e300"), "loading.settle_time");
+}
+
+#[test]
 fn what_check_called_valid_and_run_refused_is_now_refused_by_both() {
     refused_by_both(&with(DEMO, "tau", "0.5"), "demo.tau");
     refused_by_both(&with(DEMO, "tau", "nan"), "demo.tau");

@@ -359,8 +359,16 @@ impl FractureScene {
         let h = f.spacing;
         let lx = self.packing.width + 2.0 * f.margin;
         let nodes = [
-            (lx / h).round() as usize + 1,
-            (self.packing.height / h).round() as usize,
+            limits::count(
+                "fluid.spacing",
+                "the lattice width in nodes",
+                (lx / h).round() + 1.0,
+            )? as usize,
+            limits::count(
+                "fluid.spacing",
+                "the lattice height in nodes",
+                (self.packing.height / h).round(),
+            )? as usize,
         ];
         if nodes[0] < 8 || nodes[1] < 8 || nodes[0].saturating_mul(nodes[1]) > 200_000_000 {
             return Err(LbdemError::field(
@@ -1406,7 +1414,7 @@ impl Kind for FractureTest {
         scene.validate()
     }
 
-    fn budget(scene: &FractureScene, _setup: &FractureSetup) -> Result<Budget> {
+    fn budget(scene: &FractureScene, setup: &FractureSetup) -> Result<Budget> {
         let mut b = Budget::new();
         b.add_items(
             "grains",
@@ -1414,6 +1422,26 @@ impl Kind for FractureTest {
             grain_count(&scene.packing)?,
             GRAIN_BYTES,
         )?;
+        // Settling steps before the loading (the loading steps are checked in `setup`).
+        let settle = limits::count(
+            "loading.settle_time",
+            "the settling steps",
+            scene.loading.settle_time / setup.timestep,
+        )?;
+        if settle > limits::MAX_STEPS {
+            limits::steps("loading.settle_time", settle)?;
+        }
+        if let Some(f) = &setup.fluid {
+            limits::lattice(
+                &mut b,
+                "fluid.spacing",
+                "fluid lattice",
+                f.nodes[0] as u64,
+                f.nodes[1] as u64,
+                8,
+                true,
+            )?;
+        }
         Ok(b)
     }
 
