@@ -13,12 +13,17 @@ pub enum LbdemError {
         source: std::io::Error,
     },
     /// The scene is not valid TOML or does not match the schema (unknown key, wrong type, missing field).
-    #[error("scene {path} is not valid: {message}\n  hint: see docs/scenes.md for every key, its unit and range")]
+    #[error("scene {path} is not valid: {message}\n  hint: {hint}")]
     ParseScene {
         /// Path given.
         path: String,
-        /// What the parser said (names the key and line).
+        /// Dotted path of the key the parser stopped at (e.g. `solid.bonds.strength`), empty when the text is
+        /// not TOML at all.
+        key: String,
+        /// What the parser said, with the line, column and the offending line (cut to a sensible length).
         message: String,
+        /// How to fix it.
+        hint: String,
     },
     /// A field has a value outside its valid range.
     #[error("scene field `{field}` = {value}: {problem}\n  hint: {hint}")]
@@ -63,6 +68,35 @@ pub enum LbdemError {
         /// What to do.
         hint: String,
     },
+    /// The run finished but some of its results are not finite numbers; `summary.json` lists them and records
+    /// everything else that was measured.
+    #[error("run finished but {count} result(s) are not finite: {list}; summary.json (written to {dir}) lists them under `non_finite`\n  hint: {hint}")]
+    NonFiniteResult {
+        /// How many results are not finite.
+        count: usize,
+        /// The first few, `results.key = value`.
+        list: String,
+        /// The run directory.
+        dir: String,
+        /// What to change.
+        hint: String,
+    },
+    /// `lbdem resume` of a run that has finished: nothing was changed.
+    #[error("the run in {dir} is already finished (summary.json, {steps} steps); nothing to resume and nothing was changed\n  hint: start a new run with `lbdem run SCENE --out DIR` (or --overwrite to replace it)")]
+    AlreadyFinished {
+        /// The run directory.
+        dir: String,
+        /// Steps of the finished run.
+        steps: u64,
+    },
+    /// The output directory holds files lbdem did not write, and `--overwrite` would have to delete them.
+    #[error("output directory {dir} holds files lbdem did not write ({files}); --overwrite only removes lbdem's own outputs\n  hint: move those files away, or choose another --out")]
+    ForeignFiles {
+        /// The directory.
+        dir: String,
+        /// The first few foreign files.
+        files: String,
+    },
     /// The run was interrupted (Ctrl-C) after writing a checkpoint and the outputs so far.
     #[error("interrupted at step {step}: checkpoint and outputs so far written to {dir}\n  hint: continue with `lbdem resume {dir}`")]
     Interrupted {
@@ -100,12 +134,34 @@ pub enum LbdemError {
     },
 }
 
+/// Longest piece of scene input quoted in a message (characters): a value, a key, a line of the file.
+pub const QUOTE_CHARS: usize = 120;
+
+/// `text` cut to at most `max` characters, saying how much was left out.
+pub fn cut(text: &str, max: usize) -> String {
+    let mut chars = text.char_indices();
+    match chars.nth(max) {
+        None => text.to_string(),
+        Some((end, _)) => {
+            let rest = text[end..].chars().count();
+            format!("{}… ({rest} more characters)", &text[..end])
+        }
+    }
+}
+
 impl LbdemError {
-    /// Shorthand for [`LbdemError::InvalidField`].
+    /// Shorthand for [`LbdemError::InvalidField`]; the value is quoted cut to [`QUOTE_CHARS`] characters.
     pub fn field(field: &str, value: impl ToString, problem: &str, hint: &str) -> Self {
+        let mut value = value.to_string();
+        // A huge float prints as hundreds of digits: show it in scientific notation.
+        if value.len() > 24 {
+            if let Ok(x) = value.parse::<f64>() {
+                value = format!("{x:e}");
+            }
+        }
         Self::InvalidField {
-            field: field.to_string(),
-            value: value.to_string(),
+            field: cut(field, QUOTE_CHARS),
+            value: cut(&value, QUOTE_CHARS),
             problem: problem.to_string(),
             hint: hint.to_string(),
         }

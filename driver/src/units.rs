@@ -140,6 +140,10 @@ impl FluidSection {
 pub const TAU_WARN_LOW: f64 = 0.51;
 /// Relaxation time above which half-way bounce-back walls move noticeably (slip ∝ τ²) and a warning is printed.
 pub const TAU_WARN_HIGH: f64 = 2.0;
+/// Relaxation time above which a scene is refused: the half-way bounce-back wall moves by a distance that
+/// grows as τ² (of the order of the channel width near τ ≈ 10 for a 20-node channel), so results are wrong by
+/// orders of magnitude, not merely inaccurate.
+pub const TAU_REFUSE_HIGH: f64 = 100.0;
 /// Expected Mach number above which compressibility errors (∝ Ma²) exceed about 1 %: warning.
 pub const MACH_WARN: f64 = 0.1;
 /// Expected Mach number above which a run is refused unless `run.allow_high_mach = true`.
@@ -198,8 +202,43 @@ impl LatticeUnits {
                 "increase the time step or the viscosity, or refine less",
             ));
         }
+        if tau > TAU_REFUSE_HIGH {
+            let field = if f.tau.is_some() {
+                "fluid.tau"
+            } else {
+                "fluid.timestep"
+            };
+            return Err(LbdemError::field(
+                field,
+                f.tau.unwrap_or(dt),
+                &format!(
+                    "gives tau = {tau:.6e}, above {TAU_REFUSE_HIGH}: the wall slip grows as tau^2 and the \
+                     results would be wrong by orders of magnitude"
+                ),
+                "use tau in (0.5, 2] (shorter fluid.timestep, coarser fluid.spacing, or check fluid.viscosity)",
+            ));
+        }
         let c = h / dt;
         let cs = c / 3f64.sqrt();
+        let compressibility = 1.0 / (f.density * cs * cs);
+        // Every derived figure must be a positive finite number: extreme but individually valid inputs
+        // (ν = 1e-300, h = 1e300) can overflow or underflow them.
+        for (name, value) in [
+            ("the time step dt", dt),
+            ("the lattice speed c = h/dt", c),
+            ("the sound speed c_s", cs),
+            ("the fluid compressibility 1/(rho0 c_s^2)", compressibility),
+            ("the lattice speed squared c^2", c * c),
+        ] {
+            if !(value.is_finite() && value > 0.0) {
+                return Err(LbdemError::field(
+                    "fluid.viscosity",
+                    format!("{nu:e} (with fluid.spacing = {h:e}, fluid.density = {:e})", f.density),
+                    &format!("gives {name} = {value:e}, which is not a positive finite number"),
+                    "check the units and magnitudes of fluid.viscosity, fluid.spacing and fluid.density",
+                ));
+            }
+        }
         Ok(Self {
             spacing: h,
             timestep: dt,
@@ -209,7 +248,7 @@ impl LatticeUnits {
             lattice_viscosity: (tau - 0.5) / 3.0,
             lattice_speed: c,
             sound_speed: cs,
-            compressibility: 1.0 / (f.density * cs * cs),
+            compressibility,
         })
     }
 

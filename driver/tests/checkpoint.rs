@@ -462,6 +462,12 @@ impl Kind for PoisonedDemo {
     fn setup(scene: &Self::Scene) -> lbdem::error::Result<Self::Setup> {
         CoupledDemo::setup(scene)
     }
+    fn budget(
+        scene: &Self::Scene,
+        setup: &Self::Setup,
+    ) -> lbdem::error::Result<lbdem::input::limits::Budget> {
+        CoupledDemo::budget(scene, setup)
+    }
     fn describe(case: &Case<Self>) -> String {
         CoupledDemo::describe(&demo(case))
     }
@@ -516,6 +522,7 @@ fn demo(case: &Case<PoisonedDemo>) -> Case<CoupledDemo> {
     Case {
         scene: case.scene.clone(),
         setup: case.setup.clone(),
+        budget: case.budget.clone(),
     }
 }
 

@@ -83,6 +83,7 @@ fn omega3_is_refused_for_a_free_grain_because_it_is_unstable() {
     let bypass = Case::<TerminalVelocity> {
         setup: UnitsSetup::new(&s.fluid).unwrap(),
         scene: s,
+        budget: Default::default(),
     };
     assert!(terminal_velocity::simulate(&bypass).is_err());
     assert!(omega3_free_grain_growth(0.35, 1.0).abs() > 1.0);

@@ -67,3 +67,19 @@ pub fn names() -> String {
         .collect::<Vec<_>>()
         .join(", ")
 }
+
+/// The kind whose scene files have the top-level section `section` (its own section, not one shared by several
+/// kinds), for the hint of a scene whose `[scene] kind` does not match its sections.
+pub fn owner_of_section(section: &str) -> Option<&'static str> {
+    const OWN: [(&str, &str); 8] = [
+        ("channel", "channel"),
+        ("cylinder_array", "cylinder_array"),
+        ("porous", "porous_flow"),
+        ("terminal_velocity", "terminal_velocity"),
+        ("pressure_diffusion", "pressure_diffusion"),
+        ("fluid_compressibility", "fluid_compressibility"),
+        ("consolidation", "consolidation"),
+        ("demo", "coupled_demo"),
+    ];
+    OWN.iter().find(|(s, _)| *s == section).map(|(_, k)| *k)
+}

@@ -59,16 +59,65 @@ pub fn prepare_dir(dir: &Path, overwrite: bool) -> Result<()> {
 /// `DIR/scene.toml` (what `lbdem resume DIR` reads).
 pub fn start_run_dir(dir: &Path, scene_text: &str, overwrite: bool) -> Result<()> {
     prepare_dir(dir, overwrite)?;
-    for stale in [CHECKPOINT_FILE, DIVERGED_FILE, SUMMARY_FILE] {
-        let p = dir.join(stale);
-        if p.exists() {
-            std::fs::remove_file(&p).map_err(|e| LbdemError::Write {
-                path: p.display().to_string(),
-                source: e,
-            })?;
-        }
+    if overwrite {
+        empty_run_dir(dir)?;
     }
     write_atomic(&dir.join(SCENE_COPY), scene_text.as_bytes())
+}
+
+/// Extensions of the files lbdem writes into a run directory (tables, figures, snapshots, the summary, the
+/// scene copy, checkpoints, and the temporary files of atomic writes). Every output is a file directly in the
+/// run directory.
+pub const OUTPUT_EXTENSIONS: [&str; 7] = ["csv", "png", "vtk", "json", "bin", "toml", "tmp"];
+
+/// Whether `entry` of a run directory looks like one of lbdem's outputs (a file with an output extension).
+fn is_output(entry: &std::fs::DirEntry) -> bool {
+    let is_file = entry.file_type().is_ok_and(|t| t.is_file());
+    let ext = entry
+        .path()
+        .extension()
+        .map(|e| e.to_string_lossy().into_owned());
+    is_file && ext.is_some_and(|e| OUTPUT_EXTENSIONS.contains(&e.as_str()))
+}
+
+/// `--overwrite`: remove a previous run's outputs from `dir`, refusing (and removing nothing) when the
+/// directory holds anything else (a subdirectory, a file of another type): files lbdem did not write.
+fn empty_run_dir(dir: &Path) -> Result<()> {
+    let err = |e| LbdemError::Write {
+        path: dir.display().to_string(),
+        source: e,
+    };
+    let entries: Vec<std::fs::DirEntry> = std::fs::read_dir(dir)
+        .map_err(err)?
+        .collect::<std::io::Result<_>>()
+        .map_err(err)?;
+    let foreign: Vec<String> = entries
+        .iter()
+        .filter(|e| !is_output(e))
+        .map(|e| e.file_name().to_string_lossy().into_owned())
+        .collect();
+    if !foreign.is_empty() {
+        let mut files = foreign
+            .iter()
+            .take(5)
+            .cloned()
+            .collect::<Vec<_>>()
+            .join(", ");
+        if foreign.len() > 5 {
+            files += &format!(" and {} more", foreign.len() - 5);
+        }
+        return Err(LbdemError::ForeignFiles {
+            dir: dir.display().to_string(),
+            files,
+        });
+    }
+    for e in entries {
+        std::fs::remove_file(e.path()).map_err(|source| LbdemError::Write {
+            path: e.path().display().to_string(),
+            source,
+        })?;
+    }
+    Ok(())
 }
 
 /// The scene text saved in a run directory.

@@ -62,4 +62,42 @@ pub struct Summary {
     pub wall_seconds: f64,
     /// What the kind measured.
     pub results: serde_json::Value,
+    /// The results that are not finite numbers (`results.<key>` paths; NaN and ±∞ are written as `null`). A
+    /// run with any of them exits non-zero.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub non_finite: Vec<String>,
+}
+
+/// The `results.<path>` of every value of `results` that is not a finite number: JSON has no NaN or infinity,
+/// so `serde_json` turns them into `null`. Keys named in `not_measured` may be `null` legitimately (see
+/// `crate::run::Kind::NOT_MEASURED`).
+pub fn non_finite(results: &serde_json::Value, not_measured: &[&str]) -> Vec<String> {
+    fn walk(v: &serde_json::Value, path: String, skip: &[&str], out: &mut Vec<String>) {
+        match v {
+            serde_json::Value::Null => {
+                let leaf = path.rsplit('.').next().unwrap_or_default();
+                let leaf = leaf.split('[').next().unwrap_or_default();
+                if !skip.contains(&leaf) {
+                    out.push(path)
+                }
+            }
+            serde_json::Value::Number(n) if n.as_f64().is_some_and(|x| !x.is_finite()) => {
+                out.push(path)
+            }
+            serde_json::Value::Array(a) => {
+                for (i, e) in a.iter().enumerate() {
+                    walk(e, format!("{path}[{i}]"), skip, out);
+                }
+            }
+            serde_json::Value::Object(m) => {
+                for (k, e) in m {
+                    walk(e, format!("{path}.{k}"), skip, out);
+                }
+            }
+            _ => {}
+        }
+    }
+    let mut out = Vec::new();
+    walk(results, "results".into(), not_measured, &mut out);
+    out
 }

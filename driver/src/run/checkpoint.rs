@@ -15,7 +15,7 @@
 //! | 32 | SHA-256 of the scene file text the run started from |
 //! | 8 | step (u64) the state is at |
 //! | 8 | payload length (u64) |
-//! | 32 | SHA-256 of the payload |
+//! | 32 | SHA-256 of everything before this field followed by the payload: the whole file is under the checksum |
 //! | … | payload: the state in [`postcard`] encoding (serde; floats as their raw IEEE-754 bytes) |
 //!
 //! A truncated, corrupted, foreign or
@@ -51,8 +51,9 @@ pub use crate::output::{CHECKPOINT_FILE, DIVERGED_FILE, SCENE_COPY};
 /// First bytes of every checkpoint file.
 pub const MAGIC: [u8; 8] = *b"LBDEMCKP";
 /// Version of the layout; bumped whenever the header or the payload encoding changes. Version 1 (hand-written
-/// payloads) was replaced by version 2 (serde + postcard payloads); version 3 adds the lattice's side velocity
-/// profiles (issue 11), so version-2 files are refused with the version named.
+/// payloads) was replaced by version 2 (serde + postcard payloads, the checksum over the payload only). Version 3
+/// adds the lattice's side velocity profiles (issue 11) and puts the header under the checksum (in version 2 an
+/// edited step or kind tag went unnoticed); version-2 files are refused with the version named.
 pub const FORMAT_VERSION: u32 = 3;
 /// SHA-256 of a scene text (stored in the header, checked on resume).
 pub fn scene_hash(text: &str) -> [u8; 32] {
@@ -140,7 +141,8 @@ impl Checkpoint {
         out.extend_from_slice(&scene_hash(scene_text));
         out.extend_from_slice(&step.to_le_bytes());
         out.extend_from_slice(&(payload.len() as u64).to_le_bytes());
-        out.extend_from_slice(&Sha256::digest(&payload));
+        let digest = digest(&out, &payload);
+        out.extend_from_slice(&digest);
         out.extend_from_slice(&payload);
         out
     }
@@ -268,6 +270,14 @@ impl<'a> Cursor<'a> {
     }
 }
 
+/// The checksum of a checkpoint: SHA-256 of the header bytes before it, then the payload.
+fn digest(header: &[u8], payload: &[u8]) -> [u8; 32] {
+    let mut h = Sha256::new();
+    h.update(header);
+    h.update(payload);
+    h.finalize().into()
+}
+
 fn parse(bytes: &[u8]) -> Result<(CheckpointHeader, &[u8])> {
     let mut d = Cursor { buf: bytes, pos: 0 };
     let not_ours = || LbdemError::Checkpoint {
@@ -306,7 +316,8 @@ fn parse(bytes: &[u8]) -> Result<(CheckpointHeader, &[u8])> {
     let scene_hash: [u8; 32] = d.array()?;
     let step = d.u64()?;
     let len = d.u64()?;
-    let digest: [u8; 32] = d.array()?;
+    let header_bytes = &bytes[..d.pos];
+    let stored: [u8; 32] = d.array()?;
     let payload = &bytes[d.pos..];
     if payload.len() as u64 != len {
         return Err(corrupt(format!(
@@ -314,10 +325,11 @@ fn parse(bytes: &[u8]) -> Result<(CheckpointHeader, &[u8])> {
             payload.len()
         )));
     }
-    let actual: [u8; 32] = Sha256::digest(payload).into();
-    if actual != digest {
+    if digest(header_bytes, payload) != stored {
         return Err(corrupt(
-            "payload checksum (SHA-256) does not match: the file is corrupted".into(),
+            "checksum (SHA-256 of the header and the payload) does not match: the file is corrupted or \
+             was edited"
+                .into(),
         ));
     }
     Ok((

@@ -49,6 +49,9 @@ impl From<CheckpointInterval> for IntervalRepr {
     }
 }
 
+/// Longest wall-clock checkpoint interval accepted: about a century (3.2e9 s).
+pub const MAX_INTERVAL_SECONDS: f64 = 3.2e9;
+
 impl CheckpointInterval {
     /// Parse `"never"`, `"<n> steps"`, or a duration `"<x> s|min|h"`.
     pub fn parse(text: &str) -> std::result::Result<Self, String> {
@@ -76,6 +79,14 @@ impl CheckpointInterval {
             "steps" | "step" if x.fract() == 0.0 => return Ok(CheckpointInterval::Steps(x as u64)),
             _ => return Err(bad()),
         };
+        // Duration::from_secs_f64 panics above ~1.8e19 s: anything beyond a century is "never" in practice
+        // and most likely a typo, so it is refused.
+        if seconds > MAX_INTERVAL_SECONDS {
+            return Err(format!(
+                "run.checkpoint_interval = {text:?} is {seconds:e} s, above the limit of {MAX_INTERVAL_SECONDS:e} s; \
+                 use \"never\" to checkpoint only at the end and on interrupt"
+            ));
+        }
         Ok(CheckpointInterval::WallSeconds(seconds))
     }
 }

@@ -22,6 +22,7 @@ use serde::Serialize;
 
 use crate::engine::exec::Exec;
 use crate::error::{LbdemError, Result};
+use crate::input::limits::Budget;
 use crate::output::summary::{Execution, Summary};
 use crate::output::{
     read_scene_copy, start_run_dir, write_atomic, CHECKPOINT_FILE, DIVERGED_FILE, SCENE_COPY,
@@ -57,29 +58,37 @@ pub struct Case<K: Kind> {
     pub scene: K::Scene,
     /// Everything derived from it (lattice size, units, critical steps, …): what `lbdem check` prints.
     pub setup: K::Setup,
+    /// The sizes and the memory the run needs, checked against the limits ([`crate::input::limits`]).
+    pub budget: Budget,
 }
 
 impl<K: Kind> Case<K> {
     /// Parse scene text (`path` for messages), range-check it and derive its set-up.
     pub fn read(text: &str, path: &str) -> Result<Self> {
-        let scene: K::Scene = toml::from_str(text).map_err(|e| LbdemError::ParseScene {
-            path: path.to_string(),
-            message: e.to_string(),
-        })?;
+        let scene: K::Scene = crate::input::parse::parse_scene(text, path)?;
         Self::new(scene)
     }
 
-    /// Range-check a scene and derive its set-up.
+    /// Range-check a scene, derive its set-up and check every size it implies and the memory it needs
+    /// against the limits — all without allocating anything that grows with the scene. This is the whole
+    /// validation of `lbdem run`; `lbdem check` is exactly this.
     pub fn new(scene: K::Scene) -> Result<Self> {
         K::validate(&scene)?;
         let setup = K::setup(&scene)?;
-        Ok(Self { scene, setup })
+        let budget = K::budget(&scene, &setup)?;
+        budget.check()?;
+        Ok(Self {
+            scene,
+            setup,
+            budget,
+        })
     }
 
     /// What `lbdem check` prints: the derived figures and the warnings.
     pub fn describe(&self, path: &str) -> String {
         let mut s = format!("scene {path} is valid (kind = {})\n", K::NAME);
         s += &K::describe(self);
+        s += &self.budget.describe();
         for w in K::warnings(self) {
             s += &format!("  WARNING: {w}\n");
         }
@@ -102,11 +111,21 @@ pub trait Kind: Sized + 'static {
     type Setup: Serialize + Sync;
     /// Everything a run needs to continue bitwise exactly: what checkpoints hold.
     type State: Persist + Send;
+    /// Names of result keys (the last segment of a `results` path) whose value may be `null` meaning "not
+    /// applicable" or "not measured" (an `Option` that is `None`, or a documented NaN sentinel such as the
+    /// drift of a run that never became steady). Every other `null` in the results is a non-finite number and
+    /// fails the run ([`LbdemError::NonFiniteResult`]).
+    const NOT_MEASURED: &'static [&'static str] = &[];
 
     /// Range checks naming the field and the fix.
     fn validate(scene: &Self::Scene) -> Result<()>;
     /// Derive the set-up (units, sizes, limits), refusing unstable settings.
     fn setup(scene: &Self::Scene) -> Result<Self::Setup>;
+    /// The sizes a run of the scene implies (lattice nodes, grains, steps, records, snapshots, cases), each
+    /// computed in checked arithmetic ([`crate::input::limits`]) and refused naming its field when above a
+    /// limit, with the memory they take: checked against the machine's available memory before anything is
+    /// allocated. Must not allocate anything that grows with the scene.
+    fn budget(scene: &Self::Scene, setup: &Self::Setup) -> Result<Budget>;
     /// The derived figures, one per line, indented by two spaces.
     fn describe(case: &Case<Self>) -> String;
     /// Warnings about the settings (printed at start-up, listed in the summary).
@@ -214,6 +233,23 @@ pub fn resume<K: Kind>(dir: &Path, opts: &RunOptions) -> Result<serde_json::Valu
     let case = Case::<K>::read(&text, &copy)?;
     let (header, mut state) =
         Checkpoint::load::<K::State>(&dir.join(CHECKPOINT_FILE), &text, K::NAME)?;
+    if K::steps_done(&state) != header.step {
+        return Err(LbdemError::Checkpoint {
+            path: dir.join(CHECKPOINT_FILE).display().to_string(),
+            problem: format!(
+                "says step {} in its header but its state is at step {}",
+                header.step,
+                K::steps_done(&state)
+            ),
+            hint: "the file is damaged; resume from an earlier copy or start the run again (--overwrite)".into(),
+        });
+    }
+    if K::finished(&case, &state) && dir.join(SUMMARY_FILE).exists() {
+        return Err(LbdemError::AlreadyFinished {
+            dir: dir.display().to_string(),
+            steps: header.step,
+        });
+    }
     if !opts.quiet {
         eprintln!(
             "lbdem: resuming {} run in {} at step {}",
@@ -286,6 +322,7 @@ fn drive<K: Kind>(
         }),
         End::Finished => {
             let results = K::results(case, &state)?;
+            let non_finite = crate::output::summary::non_finite(&results, K::NOT_MEASURED);
             let summary = Summary {
                 schema_version: crate::output::summary::SCHEMA_VERSION,
                 lbdem_version: env!("CARGO_PKG_VERSION"),
@@ -300,6 +337,7 @@ fn drive<K: Kind>(
                 segment_first_step: segment.first_step,
                 wall_seconds: segment.started.elapsed().as_secs_f64(),
                 results,
+                non_finite,
             };
             let value = serde_json::to_value(&summary).unwrap_or_default();
             if let Some(dir) = dir {
@@ -313,6 +351,23 @@ fn drive<K: Kind>(
                         dir.display()
                     );
                 }
+            }
+            if !summary.non_finite.is_empty() {
+                let list = summary
+                    .non_finite
+                    .iter()
+                    .take(5)
+                    .cloned()
+                    .collect::<Vec<_>>()
+                    .join(", ");
+                return Err(LbdemError::NonFiniteResult {
+                    count: summary.non_finite.len(),
+                    list,
+                    dir: dir.map(|d| d.display().to_string()).unwrap_or_default(),
+                    hint: "the settings are outside what the method resolves (look at the warnings and derived \
+                           figures printed by `lbdem check`); summary.json records everything that was measured"
+                        .into(),
+                });
             }
             Ok(value)
         }
@@ -399,7 +454,7 @@ fn drive_loop<K: Kind>(
             bar.set_length(step);
         }
         let due = match interval {
-            CheckpointInterval::Steps(n) => step >= last_step + n,
+            CheckpointInterval::Steps(n) => step >= last_step.saturating_add(n),
             CheckpointInterval::WallSeconds(s) => last_time.elapsed() >= Duration::from_secs_f64(s),
             CheckpointInterval::Never => false,
         };

@@ -29,6 +29,8 @@ use crate::run::interval::CheckpointInterval;
 
 pub mod solid;
 
+pub use crate::input::limits;
+
 pub use crate::units::{FluidSection, UnitLabels, UnitSystem};
 
 /// Floating-point precision of the kernels.
@@ -40,6 +42,16 @@ pub enum Precision {
     /// Double precision.
     #[default]
     F64,
+}
+
+impl Precision {
+    /// Bytes per float.
+    pub fn float_bytes(self) -> u64 {
+        match self {
+            Precision::F32 => 4,
+            Precision::F64 => 8,
+        }
+    }
 }
 
 /// `[scene]`: what is simulated, in which units and precision.
@@ -142,12 +154,13 @@ impl RunSection {
         Ok(())
     }
 
-    /// Steps to run (an upper bound when a steady tolerance is set), from `steps` or `duration` / Δt.
-    pub fn step_count(&self, timestep: f64) -> u64 {
+    /// Steps to run (an upper bound when a steady tolerance is set), from `steps` or `duration` / Δt, refused
+    /// naming the field above [`limits::MAX_STEPS`].
+    pub fn step_count(&self, timestep: f64) -> Result<u64> {
         match (self.steps, self.duration) {
-            (Some(s), _) => s,
-            (None, Some(d)) => (d / timestep).ceil().max(1.0) as u64,
-            _ => 1,
+            (Some(s), _) => limits::steps("run.steps", s),
+            (None, Some(d)) => limits::steps_for("run.duration", d, timestep, true),
+            _ => Ok(1),
         }
     }
 }
@@ -195,6 +208,9 @@ impl UnitsSetup {
 /// The number of lattice spacings in `length` when it is a positive whole number of them (within 1 %).
 pub(crate) fn whole_spacings(field: &str, length: f64, h: f64) -> Result<usize> {
     let n = (length / h).round();
+    if n > limits::MAX_SIDE as f64 {
+        return Err(limits::side_too_long(field, length, n));
+    }
     if !(length.is_finite() && length > 0.0) || n < 1.0 || (n * h - length).abs() > 0.01 * h {
         return Err(LbdemError::field(
             field,
@@ -212,24 +228,4 @@ pub(crate) fn whole_spacings(field: &str, length: f64, h: f64) -> Result<usize> 
     Ok(n as usize)
 }
 
-/// Read a scene file; the error names the path.
-pub fn read_scene_text(path: &std::path::Path) -> Result<String> {
-    std::fs::read_to_string(path).map_err(|e| LbdemError::ReadScene {
-        path: path.display().to_string(),
-        source: e,
-    })
-}
-
-/// The `[scene] kind` of a scene's TOML text as `K` (a kind enum, or `String`); `None` if the header does not
-/// parse as `K` (the scene's own parser then reports the problem).
-pub fn peek_kind<K: serde::de::DeserializeOwned>(text: &str) -> Option<K> {
-    #[derive(Deserialize)]
-    struct Header<K> {
-        scene: KindField<K>,
-    }
-    #[derive(Deserialize)]
-    struct KindField<K> {
-        kind: K,
-    }
-    toml::from_str::<Header<K>>(text).ok().map(|h| h.scene.kind)
-}
+pub use crate::input::parse::{kind_field, parse_scene, peek_kind, read_scene_text, KindField};

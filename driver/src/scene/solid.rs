@@ -7,6 +7,7 @@ use serde::{Deserialize, Serialize};
 use crate::engine::dem::packing::{hexagonal_packing, PackingSpec};
 use crate::engine::dem::world::{BondSpec, DemWorld};
 use crate::error::{non_negative, positive, LbdemError, Result};
+use crate::input::limits;
 
 /// `[packing]`: the box, the size distribution and the isotropic stress (see [`PackingSpec`]).
 #[derive(Clone, Debug, Deserialize, Serialize)]
@@ -118,10 +119,24 @@ pub struct SolidSection {
 }
 
 /// Range checks of `[packing]` and `[solid]`, naming the field (shared by every scene that packs grains).
+/// An upper bound on the grains of a packing (box area × solid fraction over the area of the smallest grain),
+/// computed before packing and refused above [`limits::MAX_GRAINS`] naming `packing.width`.
+pub fn grain_count(p: &PackingSection) -> Result<u64> {
+    let grain =
+        std::f64::consts::PI * p.radius_min * p.radius_min * p.aspect_ratio.clamp(1e-3, 1.0);
+    let n = limits::count_up(
+        "packing.width",
+        "the grain count",
+        p.width * p.height * p.solid_fraction.clamp(0.0, 1.0) / grain,
+    )?;
+    limits::grains("packing.width", n)
+}
+
 pub fn validate_packing_and_solid(p: &PackingSection, s: &SolidSection) -> Result<()> {
     positive("packing.width", p.width, "box width along x")?;
     positive("packing.height", p.height, "box height along y")?;
     positive("packing.radius_min", p.radius_min, "e.g. 0.07 cm")?;
+    grain_count(p)?;
     positive("packing.radius_max", p.radius_max, "e.g. 0.11 cm")?;
     positive("packing.density", p.density, "e.g. 2.65 g/cm^3")?;
     positive("packing.isotropic_stress", p.isotropic_stress, "e.g. 50")?;

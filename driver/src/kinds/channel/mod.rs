@@ -18,6 +18,7 @@ use serde::{Deserialize, Serialize};
 use crate::engine::exec::Exec;
 use crate::engine::lattice::FluidLattice;
 use crate::error::{positive, LbdemError, Result};
+use crate::input::limits::{self, Budget};
 use crate::observe::flow::max_mach;
 use crate::observe::health::fluid_health;
 use crate::observe::steady::Steadiness;
@@ -74,10 +75,7 @@ pub struct ChannelScene {
 impl ChannelScene {
     /// Parse a channel scene from TOML text (`path` for messages; ranges are checked by [`ChannelSetup::new`]).
     pub fn from_toml(text: &str, path: &str) -> Result<Self> {
-        toml::from_str(text).map_err(|e| LbdemError::ParseScene {
-            path: path.to_string(),
-            message: e.to_string(),
-        })
+        crate::scene::parse_scene(text, path)
     }
 }
 
@@ -114,7 +112,10 @@ pub struct ChannelSetup {
 
 fn nodes_for(field: &str, length: f64, h: f64) -> Result<usize> {
     let n = (length / h).round();
-    if n < 1.0 || (n * h - length).abs() > 0.01 * h {
+    if n > crate::input::limits::MAX_SIDE as f64 {
+        return Err(crate::input::limits::side_too_long(field, length, n));
+    }
+    if n.is_nan() || n < 1.0 || (n * h - length).abs() > 0.01 * h {
         return Err(LbdemError::field(
             field,
             length,
@@ -197,7 +198,7 @@ impl ChannelSetup {
                 ));
             }
         }
-        let steps = scene.run.step_count(units.timestep);
+        let steps = scene.run.step_count(units.timestep)?;
         Ok(Self {
             units,
             nx,
@@ -578,6 +579,20 @@ impl Kind for Channel {
         ChannelSetup::new(scene)
     }
 
+    fn budget(scene: &ChannelScene, setup: &ChannelSetup) -> Result<Budget> {
+        let mut b = Budget::new();
+        limits::lattice(
+            &mut b,
+            "channel.length",
+            "channel lattice",
+            setup.nx as u64,
+            setup.ny as u64,
+            scene.scene.precision.float_bytes(),
+            false,
+        )?;
+        Ok(b)
+    }
+
     fn describe(case: &Case<Self>) -> String {
         case.setup.describe(case.scene.scene.units.labels())
     }
@@ -632,11 +647,9 @@ impl Kind for Channel {
         case: &Case<Self>,
         state: &ChannelState,
         dir: &Path,
-        stage: OutputStage,
+        _stage: OutputStage,
     ) -> Result<()> {
-        if stage == OutputStage::Checkpoint {
-            return Ok(());
-        }
+        // Periodic checkpoints flush the tables too, so that a killed run keeps its records so far.
         let o = each!(state, r => r.outcome(&case.setup));
         write_atomic(&dir.join("profile.csv"), profile_csv(&o).as_bytes())
     }

@@ -14,6 +14,7 @@ use crate::engine::dem::DemWorld;
 use crate::engine::exec::Exec;
 use crate::engine::lattice::FluidLattice;
 use crate::error::{positive, LbdemError, Result};
+use crate::input::limits::{self, Budget};
 use crate::observe::health::{dem_health, finite, fluid_health};
 use crate::output::{csv, write_atomic};
 use crate::run::{run_in_memory, Case, CheckpointInterval, Kind, OutputStage, Persist, RunOptions};
@@ -315,6 +316,69 @@ impl Kind for Consolidation {
         Ok(())
     }
 
+    fn budget(scene: &ConsolidationScene, setup: &UnitsSetup) -> Result<Budget> {
+        let c = &scene.consolidation;
+        let u = &setup.units;
+        let grains = limits::mul(
+            "consolidation.columns",
+            "the grain count",
+            c.columns as u64,
+            c.rows as u64,
+        )?;
+        let grains = limits::grains("consolidation.columns", grains)?;
+        let steps = limits::steps_for("consolidation.duration", c.duration, u.timestep, false)?;
+        // The DEM sub-steps per fluid step, from the critical step of the same grains as the run's (all of
+        // one radius: a 2 x 2 probe has the run's critical step).
+        let probe = hexagonal_packing(2, 2, c.radius, 1.0, 0.0, c.grain_density, c.seed);
+        let model = ContactModel {
+            normal_stiffness: c.normal_stiffness,
+            shear_stiffness: c.normal_stiffness,
+            friction: c.friction,
+            restitution: 1.0,
+            no_tension: true,
+        };
+        let critical = DemWorld::new(probe, model, 1e-300)?.critical_time_step();
+        let substeps = limits::substeps(
+            "consolidation.normal_stiffness",
+            u.timestep / (0.5 * critical),
+        )?;
+        limits::steps(
+            "consolidation.normal_stiffness",
+            limits::mul(
+                "consolidation.duration",
+                "the DEM step count",
+                steps,
+                substeps,
+            )?,
+        )?;
+        let side = |n: u64| (n as f64 * 2.0 * c.radius / u.spacing).ceil();
+        let nx = limits::count(
+            "consolidation.columns",
+            "the lattice width",
+            side(c.columns as u64) + 2.0,
+        )?;
+        let ny = limits::count(
+            "consolidation.rows",
+            "the lattice height",
+            side(c.rows as u64 + 1) + 2.0,
+        )?;
+        let mut b = Budget::new();
+        b.note(format!(
+            "DEM critical step {critical:.4e} (time units of the scene): {substeps} DEM sub-step(s) per fluid step \
+             (limit {}), {} DEM steps in all",
+            limits::MAX_SUBSTEPS,
+            steps.saturating_mul(substeps)
+        ));
+        limits::lattice(&mut b, "consolidation.columns", "lattice", nx, ny, 8, true)?;
+        b.add_items(
+            "grains",
+            "consolidation.columns",
+            grains,
+            limits::GRAIN_BYTES,
+        )?;
+        Ok(b)
+    }
+
     fn setup(scene: &ConsolidationScene) -> Result<UnitsSetup> {
         UnitsSetup::new(&scene.fluid)
     }
@@ -389,11 +453,9 @@ impl Kind for Consolidation {
         _case: &Case<Self>,
         state: &ConsolidationState,
         dir: &Path,
-        stage: OutputStage,
+        _stage: OutputStage,
     ) -> Result<()> {
-        if stage == OutputStage::Checkpoint {
-            return Ok(());
-        }
+        // Periodic checkpoints flush the tables too, so that a killed run keeps its records so far.
         let series = csv(
             &["time", "bottom_pressure_over_load"],
             state.series.iter().map(|r| r.to_vec()),

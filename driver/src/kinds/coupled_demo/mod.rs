@@ -36,10 +36,12 @@ use crate::engine::dem::DemWorld;
 use crate::engine::exec::Exec;
 use crate::engine::lattice::FluidLattice;
 use crate::error::{LbdemError, Result};
+use crate::input::limits::{self, Budget};
 use crate::observe::health::{dem_health, fluid_health};
 use crate::output::{csv, write_atomic};
 use crate::run::{Case, CheckpointInterval, Kind, OutputStage, Persist};
 use crate::scene::{CheckpointSection, UnitLabels, UnitSystem};
+use crate::units::TAU_REFUSE_HIGH;
 
 /// `[scene]` of the demo (only `kind` and an optional name).
 #[derive(Clone, Debug, Deserialize, Serialize)]
@@ -207,6 +209,17 @@ impl Kind for CoupledDemo {
                 "use nx, ny >= 4 radius + 8",
             ));
         }
+        if !(d.tau.is_finite() && d.tau > 0.5 && d.tau <= TAU_REFUSE_HIGH) {
+            return Err(LbdemError::field(
+                "demo.tau",
+                d.tau,
+                &format!(
+                    "must lie in (0.5, {TAU_REFUSE_HIGH}]: BGK is unstable for tau <= 1/2 and meaningless far above 2"
+                ),
+                "use tau in (0.5, 2], e.g. 0.8",
+            ));
+        }
+        limits::steps("demo.steps", d.steps)?;
         if !(d.speed.is_finite() && d.speed.abs() < 0.1) {
             return Err(LbdemError::field(
                 "demo.speed",
@@ -228,6 +241,23 @@ impl Kind for CoupledDemo {
 
     fn setup(scene: &DemoScene) -> Result<DemoSection> {
         Ok(scene.demo.clone())
+    }
+
+    fn budget(_scene: &DemoScene, d: &DemoSection) -> Result<Budget> {
+        let mut b = Budget::new();
+        limits::lattice(
+            &mut b,
+            "demo.nx",
+            "periodic lattice",
+            d.nx as u64,
+            d.ny as u64,
+            8,
+            true,
+        )?;
+        // One row of series.csv per record interval, kept in the state.
+        let rows = d.steps.div_ceil(d.record_interval);
+        b.add_items("series rows", "demo.record_interval", rows, 8 * 7 + 24)?;
+        Ok(b)
     }
 
     fn describe(case: &Case<Self>) -> String {

@@ -35,6 +35,7 @@ use serde_json::json;
 use crate::engine::exec::Exec;
 use crate::engine::lattice::{FluidDisc, FluidLattice};
 use crate::error::{LbdemError, Result};
+use crate::input::limits::{self, Budget};
 use crate::observe::darcy::SteadyFlow;
 use crate::observe::flow::max_mach;
 use crate::observe::health::fluid_health;
@@ -389,6 +390,27 @@ impl ArraySetup {
             )
         })?;
         let l = whole_spacings("cylinder_array.cell", a.cell, units.spacing)?;
+        // Sizes in checked arithmetic before any case is derived.
+        let drives = a.reynolds.as_ref().map_or(1, |r| r.len() as u64);
+        limits::cases(
+            "cylinder_array.solid_fractions",
+            limits::mul(
+                "cylinder_array.solid_fractions",
+                "the case count",
+                a.solid_fractions.len() as u64,
+                drives,
+            )?,
+        )?;
+        let mut probe = Budget::new();
+        limits::lattice(
+            &mut probe,
+            "cylinder_array.cell",
+            "cell lattice",
+            l as u64,
+            l as u64,
+            8,
+            true,
+        )?;
         let mut warnings = Warnings::default();
         check_tau(&units, &mut warnings);
         let template = ArrayCase {
@@ -399,7 +421,7 @@ impl ArraySetup {
             solid_operator: a.solid_operator,
             steady_tolerance: scene.run.steady_tolerance.unwrap_or(1e-8),
             check_interval: scene.run.check_interval.unwrap_or(200),
-            max_steps: scene.run.step_count(units.timestep),
+            max_steps: scene.run.step_count(units.timestep)?,
         };
         let mut cases = Vec::new();
         for &c in &a.solid_fractions {
@@ -512,6 +534,8 @@ pub struct CylinderArray;
 
 impl Kind for CylinderArray {
     const NAME: &'static str = "cylinder_array";
+    const NOT_MEASURED: &'static [&'static str] =
+        &["drift_per_step", "reference_drag", "drag_error"];
     type Scene = CylinderArrayScene;
     type Setup = ArraySetup;
     type State = ArrayState;
@@ -582,6 +606,23 @@ impl Kind for CylinderArray {
             }
             _ => Ok(()),
         }
+    }
+
+    fn budget(scene: &CylinderArrayScene, setup: &ArraySetup) -> Result<Budget> {
+        // The cases run one after the other on lattices of the same size.
+        let mut b = Budget::new();
+        if let Some(c) = setup.cases.first() {
+            limits::lattice(
+                &mut b,
+                "cylinder_array.cell",
+                "cell lattice",
+                c.cell as u64,
+                c.cell as u64,
+                scene.scene.precision.float_bytes(),
+                true,
+            )?;
+        }
+        Ok(b)
     }
 
     fn setup(scene: &CylinderArrayScene) -> Result<ArraySetup> {
@@ -656,11 +697,9 @@ impl Kind for CylinderArray {
         _case: &Case<Self>,
         state: &ArrayState,
         dir: &Path,
-        stage: OutputStage,
+        _stage: OutputStage,
     ) -> Result<()> {
-        if stage == OutputStage::Checkpoint {
-            return Ok(());
-        }
+        // Periodic checkpoints flush the tables too, so that a killed run keeps its records so far.
         let table = each!(state, r => drag_csv(&r.done));
         write_atomic(&dir.join("drag.csv"), table.as_bytes())
     }

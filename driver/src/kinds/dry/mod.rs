@@ -50,10 +50,12 @@ use crate::engine::dem::staged::{BoundaryStressRun, CompressionRun};
 use crate::engine::dem::world::{DemWorld, CRITICAL_STEP_SAFETY};
 use crate::engine::exec::Exec;
 use crate::error::{non_negative, positive, LbdemError, Result};
+use crate::input::limits::{Budget, GRAIN_BYTES};
 use crate::observe::health::dem_health;
 use crate::output::vtk::particles_vtk;
 use crate::output::{csv, write_atomic};
 use crate::run::{Case, CheckpointInterval, Kind, OutputStage, Persist};
+use crate::scene::solid::grain_count;
 use crate::scene::solid::{
     bond_spec, critical_time_step, packing_spec, validate_packing_and_solid, PackingSection,
     SolidSection,
@@ -478,6 +480,12 @@ pub struct Dry;
 
 impl Kind for Dry {
     const NAME: &'static str = "dry";
+    const NOT_MEASURED: &'static [&'static str] = &[
+        "final_axial_strain",
+        "final_lateral_strain",
+        "final_bottom_platen_stress",
+        "final_lateral_stress",
+    ];
     type Scene = DryScene;
     type Setup = DrySetup;
     type State = DryState;
@@ -486,10 +494,29 @@ impl Kind for Dry {
         scene.validate()
     }
 
+    fn budget(scene: &DryScene, _setup: &DrySetup) -> Result<Budget> {
+        let mut b = Budget::new();
+        b.add_items(
+            "grains",
+            "packing.width",
+            grain_count(&scene.packing)?,
+            GRAIN_BYTES,
+        )?;
+        Ok(b)
+    }
+
     fn setup(scene: &DryScene) -> Result<DrySetup> {
         let critical = critical_time_step(&scene.packing, &scene.solid);
         let dt = scene.solid.timestep;
-        if dt > CRITICAL_STEP_SAFETY * critical {
+        if !(critical.is_finite() && critical > 0.0) {
+            return Err(LbdemError::field(
+                "solid.normal_stiffness",
+                format!("{:e}", scene.solid.normal_stiffness),
+                &format!("gives a DEM critical step of {critical:e}, not a positive finite time"),
+                "check the magnitudes of the stiffnesses, packing.radius_min and packing.density",
+            ));
+        }
+        if dt.is_nan() || dt > CRITICAL_STEP_SAFETY * critical {
             return Err(LbdemError::field(
                 "solid.timestep",
                 format!("{dt:e}"),
@@ -573,14 +600,10 @@ impl Kind for Dry {
         _case: &Case<Self>,
         state: &DryState,
         dir: &Path,
-        stage: OutputStage,
+        _stage: OutputStage,
     ) -> Result<()> {
-        each!(state, r => {
-            match stage {
-                OutputStage::Checkpoint => Ok(()),
-                _ => r.write_tables(dir),
-            }
-        })
+        // Periodic checkpoints flush the tables too, so that a killed run keeps its records so far.
+        each!(state, r => r.write_tables(dir))
     }
 
     fn results(_case: &Case<Self>, state: &DryState) -> Result<serde_json::Value> {

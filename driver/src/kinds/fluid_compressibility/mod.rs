@@ -11,6 +11,7 @@ use serde::{Deserialize, Serialize};
 use crate::engine::exec::Exec;
 use crate::engine::lattice::FluidLattice;
 use crate::error::{positive, LbdemError, Result};
+use crate::input::limits::{self, Budget};
 use crate::observe::health::fluid_health;
 use crate::run::{run_in_memory, Case, CheckpointInterval, Kind, OutputStage, Persist, RunOptions};
 use crate::scene::{CheckpointSection, SceneHeader, UnitLabels, UnitsSetup};
@@ -348,6 +349,64 @@ impl Kind for FluidCompressibility {
             ));
         }
         Ok(())
+    }
+
+    fn budget(scene: &CompressibilityScene, setup: &UnitsSetup) -> Result<Budget> {
+        let c = &scene.fluid_compressibility;
+        let u = &setup.units;
+        let nx = limits::add(
+            "fluid_compressibility.length",
+            "the box length in nodes",
+            limits::count(
+                "fluid_compressibility.length",
+                "the box length in nodes",
+                u.length_to_lattice(c.length),
+            )?,
+            1,
+        )?;
+        let ny = limits::add(
+            "fluid_compressibility.height",
+            "the box height in nodes",
+            limits::count(
+                "fluid_compressibility.height",
+                "the box height in nodes",
+                u.length_to_lattice(c.height),
+            )?,
+            1,
+        )?;
+        let travel = u.length_to_lattice(c.travel);
+        let speed = u.velocity_to_lattice(c.piston_speed);
+        let moving = limits::count(
+            "fluid_compressibility.piston_speed",
+            "the piston steps",
+            2.0 * travel / speed,
+        )?;
+        let settle = limits::count(
+            "fluid_compressibility.settle",
+            "the settling steps",
+            u.time_to_steps(c.settle),
+        )?;
+        limits::steps(
+            "fluid_compressibility.settle",
+            limits::add(
+                "fluid_compressibility.settle",
+                "the step count",
+                moving,
+                settle,
+            )?
+            .max(1),
+        )?;
+        let mut b = Budget::new();
+        limits::lattice(
+            &mut b,
+            "fluid_compressibility.length",
+            "box lattice",
+            nx,
+            ny,
+            8,
+            true,
+        )?;
+        Ok(b)
     }
 
     fn setup(scene: &CompressibilityScene) -> Result<UnitsSetup> {

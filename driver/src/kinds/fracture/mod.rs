@@ -40,6 +40,7 @@ use crate::engine::dem::world::{DemWorld, PlatenControl, SampleBox, CRITICAL_STE
 use crate::engine::exec::Exec;
 use crate::engine::lattice::FluidLattice;
 use crate::error::{positive, LbdemError, Result};
+use crate::input::limits::{self, Budget, GRAIN_BYTES};
 use crate::observe::darcy::{permeability, SteadyFlow};
 use crate::observe::fit::fit_diffusivity;
 use crate::observe::health::dem_health;
@@ -47,6 +48,7 @@ use crate::observe::steady::Steadiness;
 use crate::output::vtk::{bonds_vtk, lattice_vtk, particles_vtk, Field};
 use crate::output::{csv, write_atomic, SCENE_COPY};
 use crate::run::{Case, CheckpointInterval, Kind, OutputStage, Persist};
+use crate::scene::solid::grain_count;
 use crate::scene::solid::{
     bond_spec, critical_time_step, packing_spec, validate_packing_and_solid, PackingSection,
     SolidSection,
@@ -227,10 +229,7 @@ pub struct FluidSetup {
 impl FractureScene {
     /// Parse from TOML text and check ranges (`path` for messages).
     pub fn from_toml(text: &str, path: &str) -> Result<Self> {
-        let s: FractureScene = toml::from_str(text).map_err(|e| LbdemError::ParseScene {
-            path: path.to_string(),
-            message: e.to_string(),
-        })?;
+        let s: FractureScene = crate::scene::parse_scene(text, path)?;
         s.validate()?;
         Ok(s)
     }
@@ -360,8 +359,16 @@ impl FractureScene {
         let h = f.spacing;
         let lx = self.packing.width + 2.0 * f.margin;
         let nodes = [
-            (lx / h).round() as usize + 1,
-            (self.packing.height / h).round() as usize,
+            limits::count(
+                "fluid.spacing",
+                "the lattice width in nodes",
+                (lx / h).round() + 1.0,
+            )? as usize,
+            limits::count(
+                "fluid.spacing",
+                "the lattice height in nodes",
+                (self.packing.height / h).round(),
+            )? as usize,
         ];
         if nodes[0] < 8 || nodes[1] < 8 || nodes[0].saturating_mul(nodes[1]) > 200_000_000 {
             return Err(LbdemError::field(
@@ -1389,12 +1396,53 @@ pub struct FractureTest;
 
 impl Kind for FractureTest {
     const NAME: &'static str = "fracture";
+    const NOT_MEASURED: &'static [&'static str] = &[
+        "fluid",
+        "permeability",
+        "final_axial_strain",
+        "final_lateral_strain",
+        "crack_plane_mean_deg",
+        "crack_plane_deviation_from_perpendicular_to_sigma3_deg",
+        "fracture_trace_mean_deg",
+        "fracture_trace_deviation_from_perpendicular_to_sigma3_deg",
+    ];
     type Scene = FractureScene;
     type Setup = FractureSetup;
     type State = FractureState;
 
     fn validate(scene: &FractureScene) -> Result<()> {
         scene.validate()
+    }
+
+    fn budget(scene: &FractureScene, setup: &FractureSetup) -> Result<Budget> {
+        let mut b = Budget::new();
+        b.add_items(
+            "grains",
+            "packing.width",
+            grain_count(&scene.packing)?,
+            GRAIN_BYTES,
+        )?;
+        // Settling steps before the loading (the loading steps are checked in `setup`).
+        let settle = limits::count(
+            "loading.settle_time",
+            "the settling steps",
+            scene.loading.settle_time / setup.timestep,
+        )?;
+        if settle > limits::MAX_STEPS {
+            limits::steps("loading.settle_time", settle)?;
+        }
+        if let Some(f) = &setup.fluid {
+            limits::lattice(
+                &mut b,
+                "fluid.spacing",
+                "fluid lattice",
+                f.nodes[0] as u64,
+                f.nodes[1] as u64,
+                8,
+                true,
+            )?;
+        }
+        Ok(b)
     }
 
     fn setup(scene: &FractureScene) -> Result<FractureSetup> {
@@ -1407,7 +1455,7 @@ impl Kind for FractureTest {
         Ok(FractureSetup {
             critical_time_step: critical,
             timestep: dt,
-            steps: (scene.loading.duration / dt).round().max(1.0) as u64,
+            steps: limits::steps_for("loading.duration", scene.loading.duration, dt, false)?,
             fluid,
             warnings: warnings.0,
         })
@@ -1484,11 +1532,9 @@ impl Kind for FractureTest {
         case: &Case<Self>,
         state: &FractureState,
         dir: &Path,
-        stage: OutputStage,
+        _stage: OutputStage,
     ) -> Result<()> {
-        if stage == OutputStage::Checkpoint {
-            return Ok(());
-        }
+        // Periodic checkpoints flush the tables too, so that a killed run keeps its records so far.
         FractureRun {
             scene: &case.scene,
             state,
@@ -1519,7 +1565,10 @@ pub fn compare_breaks(dirs: &[std::path::PathBuf], out: &Path) -> Result<()> {
     let mut series = Vec::new();
     for dir in dirs {
         let path = dir.join("history.csv");
-        let text = crate::scene::read_scene_text(&path)?;
+        let text = std::fs::read_to_string(&path).map_err(|e| LbdemError::ReadScene {
+            path: path.display().to_string(),
+            source: e,
+        })?;
         let mut lines = text.lines();
         let header: Vec<&str> = lines.next().unwrap_or_default().split(',').collect();
         let (Some(t), Some(b)) = (

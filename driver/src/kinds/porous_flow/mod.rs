@@ -34,6 +34,7 @@ use serde_json::json;
 use crate::engine::exec::Exec;
 use crate::engine::lattice::{FluidDisc, FluidLattice};
 use crate::error::{LbdemError, Result};
+use crate::input::limits::{self, Budget};
 use crate::observe::darcy::{permeability, SteadyFlow};
 use crate::observe::fit::linear_fit;
 use crate::observe::flow::max_mach;
@@ -76,6 +77,26 @@ pub struct PorousCase {
     pub check_interval: u64,
     /// Upper bound on the steps.
     pub max_steps: u64,
+}
+
+/// Most discs of one slab: 2 × 10⁴. The narrowest gap ([`PorousCase::min_gap`], printed by `lbdem check`)
+/// compares every pair of discs exactly, so `check` stays well under a second.
+pub const MAX_DISCS: u64 = 20_000;
+
+/// Lattice size (nx, ny) of `columns × rows` discs at `pitch` nodes with `buffer` free nodes at each end
+/// ([`PorousCase::size`] in checked arithmetic), refused naming the field that overflows.
+fn lattice_size(columns: u64, rows: u64, pitch: u64, buffer: u64) -> Result<(u64, u64)> {
+    let what = "the lattice length";
+    let nx = limits::mul("porous.columns", what, columns, pitch)?;
+    let nx = limits::add(
+        "porous.buffer",
+        what,
+        nx,
+        limits::mul("porous.buffer", what, 2, buffer)?,
+    )?;
+    let nx = limits::add("porous.columns", what, nx, 2)?;
+    let ny = limits::mul("porous.rows", "the lattice height", rows, pitch)?;
+    Ok((nx, ny))
 }
 
 impl PorousCase {
@@ -497,6 +518,30 @@ pub struct PorousSetup {
 }
 
 impl PorousSetup {
+    /// The memory of the largest case (cases run one after the other).
+    fn budget(&self, precision: Precision) -> Result<Budget> {
+        let mut b = Budget::new();
+        if let Some(c) = self.cases.first() {
+            let (nx, ny) = c.size();
+            limits::lattice(
+                &mut b,
+                "porous.columns",
+                "lattice",
+                nx as u64,
+                ny as u64,
+                precision.float_bytes(),
+                true,
+            )?;
+            b.add_items(
+                "discs",
+                "porous.rows",
+                (c.columns as u64).saturating_mul(c.rows as u64),
+                std::mem::size_of::<FluidDisc>() as u64,
+            )?;
+        }
+        Ok(b)
+    }
+
     /// Derive the lattice cases from a scene.
     pub fn new(scene: &PorousFlowScene) -> Result<Self> {
         PorousFlow::validate(scene)?;
@@ -512,6 +557,33 @@ impl PorousSetup {
         let h = units.spacing;
         let pitch = whole_spacings("porous.pitch", p.pitch, h)?;
         let buffer = whole_spacings("porous.buffer", p.buffer.unwrap_or(p.pitch), h)?;
+        // Every size in checked arithmetic before anything is built (the discs of `min_gap` included).
+        limits::cases(
+            "porous.pressure_drops",
+            limits::mul(
+                "porous.pressure_drops",
+                "the case count",
+                p.diameters.len() as u64,
+                p.pressure_drops.len() as u64,
+            )?,
+        )?;
+        let discs = limits::mul(
+            "porous.columns",
+            "the disc count",
+            p.columns as u64,
+            p.rows as u64,
+        )?;
+        if discs > MAX_DISCS {
+            return Err(LbdemError::field(
+                "porous.columns",
+                format!("{} x {} (porous.rows)", p.columns, p.rows),
+                &format!("gives {discs} discs, above the limit of {MAX_DISCS} per slab"),
+                "use fewer columns or rows (the validation's slabs hold tens of discs)",
+            ));
+        }
+        let (nx, ny) = lattice_size(p.columns as u64, p.rows as u64, pitch as u64, buffer as u64)?;
+        let mut probe = Budget::new();
+        limits::lattice(&mut probe, "porous.columns", "lattice", nx, ny, 8, true)?;
         let mut warnings = Warnings::default();
         check_tau(&units, &mut warnings);
         let mut cases = Vec::new();
@@ -533,7 +605,7 @@ impl PorousSetup {
                     density_drop: drho,
                     steady_tolerance: scene.run.steady_tolerance.unwrap_or(1e-8),
                     check_interval: scene.run.check_interval.unwrap_or(200),
-                    max_steps: scene.run.step_count(units.timestep),
+                    max_steps: scene.run.step_count(units.timestep)?,
                 };
                 let gap = case.min_gap();
                 if gap < 5.0 {
@@ -623,6 +695,11 @@ pub struct PorousFlow;
 
 impl Kind for PorousFlow {
     const NAME: &'static str = "porous_flow";
+    const NOT_MEASURED: &'static [&'static str] = &[
+        "drift_per_step",
+        "sangani_acrivos_error",
+        "fitted_kozeny_constant",
+    ];
     type Scene = PorousFlowScene;
     type Setup = PorousSetup;
     type State = PorousState;
@@ -707,6 +784,10 @@ impl Kind for PorousFlow {
         PorousSetup::new(scene)
     }
 
+    fn budget(scene: &PorousFlowScene, setup: &PorousSetup) -> Result<Budget> {
+        setup.budget(scene.scene.precision)
+    }
+
     fn describe(case: &Case<Self>) -> String {
         let u = &case.setup.units;
         let mut s = format!(
@@ -775,11 +856,9 @@ impl Kind for PorousFlow {
         case: &Case<Self>,
         state: &PorousState,
         dir: &Path,
-        stage: OutputStage,
+        _stage: OutputStage,
     ) -> Result<()> {
-        if stage == OutputStage::Checkpoint {
-            return Ok(());
-        }
+        // Periodic checkpoints flush the tables too, so that a killed run keeps its records so far.
         let table = each!(state, r => runs_csv(&r.done, case.setup.units.spacing));
         write_atomic(&dir.join("runs.csv"), table.as_bytes())
     }

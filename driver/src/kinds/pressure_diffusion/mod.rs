@@ -29,6 +29,7 @@ use crate::engine::dem::packing::{generate_packing, PackingSpec};
 use crate::engine::exec::Exec;
 use crate::engine::lattice::FluidLattice;
 use crate::error::{positive, LbdemError, Result};
+use crate::input::limits::{self, Budget, GRAIN_BYTES};
 use crate::observe::darcy::{permeability, SteadyFlow};
 use crate::observe::fit::fit_diffusivity;
 use crate::observe::health::fluid_health;
@@ -500,6 +501,50 @@ impl Kind for PressureDiffusion {
             }
         }
         Ok(())
+    }
+
+    fn budget(scene: &PressureDiffusionScene, setup: &UnitsSetup) -> Result<Budget> {
+        let d = &scene.pressure_diffusion;
+        let u = &setup.units;
+        let nx = limits::count(
+            "pressure_diffusion.width",
+            "the slab length in nodes",
+            u.length_to_lattice(d.width),
+        )?;
+        let ny = limits::count(
+            "pressure_diffusion.height",
+            "the slab height in nodes",
+            u.length_to_lattice(d.height),
+        )?;
+        // At most the box area over the smallest grain's area.
+        let grains = limits::count_up(
+            "pressure_diffusion.width",
+            "the grain count",
+            d.width * d.height / (std::f64::consts::PI * d.radius_min * d.radius_min),
+        )?;
+        let grains = limits::grains("pressure_diffusion.width", grains)?;
+        let mut b = Budget::new();
+        // Two lattices (the Darcy run and the diffusion run).
+        limits::lattice(
+            &mut b,
+            "pressure_diffusion.width",
+            "slab lattice",
+            nx.saturating_add(1),
+            ny.max(1),
+            8,
+            true,
+        )?;
+        limits::lattice(
+            &mut b,
+            "pressure_diffusion.width",
+            "Darcy lattice",
+            nx.saturating_add(1),
+            ny.max(1),
+            8,
+            true,
+        )?;
+        b.add_items("grains", "pressure_diffusion.width", grains, GRAIN_BYTES)?;
+        Ok(b)
     }
 
     fn setup(scene: &PressureDiffusionScene) -> Result<UnitsSetup> {

@@ -31,6 +31,7 @@ use crate::engine::dem::DemWorld;
 use crate::engine::exec::Exec;
 use crate::engine::lattice::FluidLattice;
 use crate::error::{positive, LbdemError, Result};
+use crate::input::limits::{self, Budget};
 use crate::observe::health::{dem_health, fluid_health};
 use crate::output::{csv, write_atomic};
 use crate::run::{run_in_memory, Case, CheckpointInterval, Kind, OutputStage, Persist, RunOptions};
@@ -390,6 +391,47 @@ impl Kind for TerminalVelocity {
         Ok(())
     }
 
+    fn budget(scene: &TerminalVelocityScene, setup: &UnitsSetup) -> Result<Budget> {
+        let t = &scene.terminal_velocity;
+        let u = &setup.units;
+        let n = limits::count(
+            "terminal_velocity.cell",
+            "the box side in nodes",
+            u.length_to_lattice(t.cell),
+        )?;
+        let steps = limits::steps_for("terminal_velocity.duration", t.duration, u.timestep, false)?;
+        if steps < 10 {
+            return Err(LbdemError::field(
+                "terminal_velocity.duration",
+                t.duration,
+                &format!("is only {steps} fluid step(s) of {:e}", u.timestep),
+                "run for many viscous times of the box (thousands of steps)",
+            ));
+        }
+        let mut b = Budget::new();
+        limits::lattice(
+            &mut b,
+            "terminal_velocity.cell",
+            "periodic lattice",
+            n,
+            n,
+            8,
+            true,
+        )?;
+        // The probe lattice of the start-up, and the records of the averaging window (one per step at most).
+        limits::lattice(
+            &mut b,
+            "terminal_velocity.cell",
+            "start-up probe lattice",
+            n,
+            n,
+            8,
+            true,
+        )?;
+        b.add_items("records", "terminal_velocity.duration", steps, 64)?;
+        Ok(b)
+    }
+
     fn setup(scene: &TerminalVelocityScene) -> Result<UnitsSetup> {
         UnitsSetup::new(&scene.fluid)
     }
@@ -459,11 +501,9 @@ impl Kind for TerminalVelocity {
         _case: &Case<Self>,
         state: &TerminalState,
         dir: &Path,
-        stage: OutputStage,
+        _stage: OutputStage,
     ) -> Result<()> {
-        if stage == OutputStage::Checkpoint {
-            return Ok(());
-        }
+        // Periodic checkpoints flush the tables too, so that a killed run keeps its records so far.
         let series = csv(&SERIES, state.records.iter().map(|r| r.to_vec()));
         write_atomic(&dir.join("series.csv"), series.as_bytes())
     }
