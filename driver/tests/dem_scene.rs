@@ -4,7 +4,7 @@ use std::path::PathBuf;
 
 use lbdem::app::{check, run, RunOptions};
 use lbdem::kinds::dry::Dry;
-use lbdem::output::vtk::parse_particles_vtk;
+use lbdem::output::vtk::parse_vtk_xml;
 use lbdem::run::Case;
 
 const BUNDLED: &str = include_str!("../../scenes/uniaxial_compression.toml");
@@ -92,16 +92,10 @@ fn small_dry_run_writes_its_outputs() {
     let particles = results["particles"].as_u64().unwrap() as usize;
     let snapshots = results["vtk_snapshots"].as_u64().unwrap() as usize;
     assert!(snapshots >= 2);
-    let last =
-        std::fs::read_to_string(out.join(format!("particles_{:04}.vtk", snapshots - 1))).unwrap();
-    let vtk = parse_particles_vtk(&last).expect("VTK parses");
+    let last = std::fs::read(out.join(format!("particles_{:04}.vtp", snapshots - 1))).unwrap();
+    let vtk = parse_vtk_xml(&last).expect("VTK parses");
     assert_eq!(vtk.points.len(), particles);
-    let fraction = &vtk
-        .arrays
-        .iter()
-        .find(|a| a.0 == "broken_bond_fraction")
-        .unwrap()
-        .2;
+    let fraction = &vtk.point("broken_bond_fraction").unwrap().values;
     assert!(fraction.iter().any(|&f| f > 0.0));
     assert!(out.join("summary.json").exists());
     // A second run into the same directory is refused without --overwrite.

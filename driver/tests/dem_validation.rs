@@ -1,7 +1,7 @@
 //! Validation of the dry bonded-particle model orchestrated by `lbdem::solid` (issue 3): scaling of the
 //! elastic modulus with the contact/bond stiffness, of the uniaxial strength with the bond strength, and the
 //! rise of the failure-envelope slope with friction (REFERENCE §7.4, dissertation ch. 2); determinism; the
-//! critical-step refusal; the VTK writer.
+//! critical-step refusal.
 //!
 //! The sample: ≈ 250 discs (radius 0.07–0.11 cm, ch. 6.6 sizes) packed by the ch. 2 procedure in a 2 × 4 cm
 //! box to the ch. 6.6 hydrostatic stress (50 dyne/cm), k_n = k_s = 1e5 dyne/cm, parallel bonds with
@@ -24,7 +24,6 @@
 use std::sync::OnceLock;
 
 use lbdem::engine::dem::*;
-use lbdem::output::vtk::{parse_particles_vtk, particles_vtk};
 use lbdem_kernels::dem::assembly::ContactModel;
 use lbdem_kernels::dem::bond::BreakMode;
 
@@ -269,40 +268,6 @@ fn step_above_critical_is_refused_naming_the_field() {
     assert_eq!(again, 0);
     p.world.bonds.clear();
     assert!(p.world.critical_time_step() > before);
-}
-
-#[test]
-fn vtk_output_parses_back_with_the_right_counts() {
-    let mut p = bonded_hexagonal_block(30);
-    // Break a few bonds by hand so that the fraction is not all zero.
-    for b in p.world.bonds.iter_mut().take(10) {
-        if let BondLaw::Parallel { bond, .. } = &mut b.law {
-            bond.intact = false;
-        }
-    }
-    let fractions = p.world.broken_bond_fraction();
-    let text = particles_vtk("bonded block", &p.world.particles, &fractions);
-    let parsed = parse_particles_vtk(&text).expect("parses");
-    let n = p.world.particles.len();
-    assert_eq!(parsed.points.len(), n);
-    assert_eq!(parsed.vertices, (0..n).collect::<Vec<_>>());
-    let names: Vec<&str> = parsed.arrays.iter().map(|a| a.0.as_str()).collect();
-    assert_eq!(
-        names,
-        [
-            "orientation",
-            "semi_axes",
-            "velocity",
-            "angular_velocity",
-            "broken_bond_fraction"
-        ]
-    );
-    for (name, comps, values) in &parsed.arrays {
-        assert_eq!(values.len(), n * comps, "{name}");
-    }
-    let broken = &parsed.arrays[4].2;
-    assert!(broken.iter().any(|&f| f > 0.0));
-    assert!((parsed.points[5][0] - p.world.particles[5].position[0]).abs() < 1e-8);
 }
 
 #[test]

@@ -168,9 +168,12 @@ fn base_test_breaks_bonds_into_fractures_perpendicular_to_the_least_stress() {
         "fractures.csv",
         "centerline_pressure.csv",
         "centerline_speed.csv",
-        "particles_0000.vtk",
-        "bonds_0000.vtk",
-        "lattice_0000.vtk",
+        "particles_0000.vtp",
+        "bonds_0000.vtp",
+        "lattice_0000.vti",
+        "particles.pvd",
+        "bonds.pvd",
+        "lattice.pvd",
     ] {
         assert!(out.join(f).exists(), "missing {f}");
     }
@@ -189,12 +192,13 @@ fn base_test_breaks_bonds_into_fractures_perpendicular_to_the_least_stress() {
             bytes.len()
         );
     }
-    let lattice = std::fs::read(out.join("lattice_0000.vtk")).unwrap();
-    assert!(lattice.starts_with(b"# vtk DataFile Version 3.0"));
+    let lattice = std::fs::read(out.join("lattice_0000.vti")).unwrap();
+    assert!(lattice.starts_with(b"<?xml version=\"1.0\"?>\n<VTKFile type=\"ImageData\""));
     let nodes = s["results"]["fluid"]["nodes"].as_array().unwrap();
     let n = nodes[0].as_u64().unwrap() * nodes[1].as_u64().unwrap();
-    // Three float scalars/vectors per node (1 + 3 + 1 floats of 4 bytes) plus the text headers.
-    assert!(lattice.len() as u64 > 20 * n && (lattice.len() as u64) < 20 * n + 2000);
+    // Per node 1 + 3 + 1 floats of 4 bytes and a 1-byte node kind (docs/outputs.md), plus the XML text and
+    // 8-byte block headers.
+    assert!(lattice.len() as u64 > 21 * n && (lattice.len() as u64) < 21 * n + 4000);
     let cp = std::fs::read_to_string(out.join("centerline_pressure.csv")).unwrap();
     let rows: Vec<&str> = cp.lines().collect();
     assert_eq!(rows.len(), h.len() + 1, "one centre-line row per record");
@@ -308,8 +312,11 @@ fn same_files(a: &Path, b: &Path) {
         "fractures.csv",
         "centerline_pressure.csv",
         "centerline_speed.csv",
-        "particles_0001.vtk",
-        "lattice_0001.vtk",
+        "particles_0001.vtp",
+        "bonds_0001.vtp",
+        "lattice_0001.vti",
+        "particles.pvd",
+        "lattice.pvd",
     ] {
         let (x, y) = (std::fs::read(a.join(f)), std::fs::read(b.join(f)));
         assert!(x.is_ok(), "{f} missing in {}", a.display());

@@ -136,6 +136,19 @@ impl<T: Real> CoupledWorld<T> {
         self.steps
     }
 
+    /// The fluid's force and torque on each grain from the last coupled step (physical units), read back from
+    /// the loads handed to the DEM minus [`CoupledWorld::applied`] (exact where nothing else is applied; else
+    /// to the rounding of that sum). Read-only.
+    pub fn fluid_loads(&self) -> Vec<([f64; 2], f64)> {
+        self.dem
+            .external_force
+            .iter()
+            .zip(&self.dem.external_torque)
+            .zip(&self.applied)
+            .map(|((f, t), (af, at))| ([f[0] - af[0], f[1] - af[1]], t - at))
+            .collect()
+    }
+
     /// The grains as the fluid sees them (lattice units).
     pub fn bodies(&self) -> Vec<CoupledBody<f64>> {
         let m = &self.map;

@@ -1,4 +1,5 @@
-//! Outputs: the run directory, atomic writes, CSV tables, VTK files, PNG plots and the one summary schema.
+//! Outputs: the run directory, atomic writes, CSV tables, VTK XML snapshots with `.pvd` collections, PNG plots
+//! and the one summary schema. Every file and column is described in `docs/outputs.md`.
 //!
 //! Every file is written to a temporary name in the same directory and renamed, so nothing already written is
 //! ever truncated or half-written. A run directory holds `scene.toml` (the scene text the run started from,
@@ -9,6 +10,7 @@ use std::path::{Path, PathBuf};
 use crate::error::{LbdemError, Result};
 
 pub mod plot;
+pub mod pvd;
 pub mod summary;
 pub mod vtk;
 

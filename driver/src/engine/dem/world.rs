@@ -325,6 +325,28 @@ impl<T: Real> DemWorld<T> {
         self.active_contacts
     }
 
+    /// Particle–particle contact loads of the last step, per particle: the summed contact force (walls and
+    /// bonds not included) and the number of active contacts (those with a non-zero normal or shear force, as
+    /// [`DemWorld::active_contacts`] counts them). Read-only; `None` before this process has stepped the world
+    /// (the per-pair forces are not checkpointed, so a world just loaded from a checkpoint has none yet).
+    pub fn contact_loads(&self) -> Option<(Vec<[T; 2]>, Vec<u32>)> {
+        if self.contact_forces.len() != self.pairs.len() {
+            return None;
+        }
+        let n = self.particles.len();
+        let mut force = vec![[T::zero(); 2]; n];
+        let mut count = vec![0u32; n];
+        for (&[i, j], f) in self.pairs.iter().zip(&self.contact_forces) {
+            if f.normal_force > T::zero() || f.shear_force != T::zero() {
+                add_to(&mut force[i], f.force_on_i);
+                add_to(&mut force[j], f.force_on_j);
+                count[i] += 1;
+                count[j] += 1;
+            }
+        }
+        Some((force, count))
+    }
+
     /// Candidate pairs of the last broad phase (sorted).
     pub fn candidate_pair_list(&self) -> &[[usize; 2]] {
         &self.pairs

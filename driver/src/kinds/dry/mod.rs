@@ -1,7 +1,8 @@
 //! The `kind = "dry"` scene: a bonded sample packed by the ch. 2 procedure and loaded between platens
 //! (uniaxial or servo-confined biaxial compression at a constant platen speed; or, with
 //! `test = "boundary_stress"`, the ch. 6.6 fracture test's dry control: axial stress through the top boundary
-//! particles, lateral stress by servo platens), with no fluid (no lattice is allocated). Outputs: `stress_strain.csv`, `broken_bonds.csv`, `particles_NNNN.vtk` (legacy VTK), and
+//! particles, lateral stress by servo platens), with no fluid (no lattice is allocated). Outputs: `stress_strain.csv`, `broken_bonds.csv`, `particles_NNNN.vtp` and `bonds_NNNN.vtp` with their
+//! `.pvd` collections (docs/outputs.md), and
 //! `summary.json` (written last).
 //!
 //! ```toml
@@ -52,7 +53,8 @@ use crate::engine::exec::Exec;
 use crate::error::{non_negative, positive, LbdemError, Result};
 use crate::input::limits::{Budget, GRAIN_BYTES};
 use crate::observe::health::dem_health;
-use crate::output::vtk::particles_vtk;
+use crate::output::pvd::write_snapshot;
+use crate::output::vtk::{bonds_vtp, particles_vtp, BreakClock, Stamp, Units};
 use crate::output::{csv, write_atomic};
 use crate::run::{Case, CheckpointInterval, Kind, OutputStage, Persist};
 use crate::scene::solid::grain_count;
@@ -346,9 +348,19 @@ impl<T: Real> DryRun<T> {
             .clone()
             .unwrap_or_else(|| "lbdem dry scene".into());
         let w = &self.world;
-        let text = particles_vtk(&title, &w.particles, &w.broken_bond_fraction());
-        let file = dir.join(format!("particles_{:04}.vtk", self.snapshots));
-        write_atomic(&file, text.as_bytes())?;
+        let dt = w.timestep().to_f64_exact();
+        let stamp = Stamp {
+            time: self.loading_steps_done as f64 * dt,
+            title,
+            units: Units::of(scene.scene.units),
+        };
+        let index = self.snapshots as usize;
+        let bytes = particles_vtp(&stamp, w, None);
+        write_snapshot(dir, "particles", index, stamp.time, "vtp", &bytes)?;
+        // Break times as in broken_bonds.csv: the world's step count times the step.
+        let clock = BreakClock { origin_step: 0, dt };
+        let bytes = bonds_vtp(&stamp, w, clock);
+        write_snapshot(dir, "bonds", index, stamp.time, "vtp", &bytes)?;
         self.snapshots += 1;
         Ok(())
     }

@@ -1,5 +1,5 @@
 //! PNG figures drawn by the fracture run itself (plotters, bitmap backend): a snapshot of the grains coloured by
-//! their fraction of broken bonds over the pore-pressure field (fig. 6.8), time–distance plots of pressure and
+//! their fraction of broken bonds over the pore-pressure field (fig. 6.8), the grains coloured by speed (fig. 6.9), time–distance plots of pressure and
 //! speed along the centre line (fig. 6.13–6.14), a rose diagram of crack-plane orientations (fig. 6.10/6.15) and
 //! broken bonds against time for one or several runs. A figure that cannot be drawn (e.g. no font on the
 //! machine) is reported as a warning by the caller; the run's data files do not depend on it.
@@ -175,6 +175,54 @@ pub fn snapshot_png(
         )
     });
     chart.draw_series(cracks)?;
+    root.present()?;
+    Ok(())
+}
+
+/// Grains (ellipses as polygons) coloured by their speed (fig. 6.9), viridis from 0 (purple) to the largest
+/// speed (yellow), at model time `time`: what ParaView shows of `particles_NNNN.vtp` coloured by `speed`.
+pub fn speed_png(path: &Path, w: &DemWorld<f64>, time: f64, velocity_unit: &str) -> FigureResult {
+    let (lo, hi) = w.bounds();
+    let (x0, x1, y0, y1) = (lo[0], hi[0], lo[1], hi[1]);
+    let width = 1400u32;
+    let plot_h = ((width - 120) as f64 * (y1 - y0) / (x1 - x0)).clamp(100.0, 2000.0) as u32;
+    crate::output::plot::register_fonts();
+    let root = BitMapBackend::new(path, (width, plot_h + 90)).into_drawing_area();
+    root.fill(&WHITE)?;
+    let speed: Vec<f64> = w
+        .particles
+        .iter()
+        .map(|p| p.velocity[0].hypot(p.velocity[1]))
+        .collect();
+    let vmax = speed
+        .iter()
+        .copied()
+        .filter(|v| v.is_finite())
+        .fold(0.0, f64::max);
+    let scale = if vmax > 0.0 { vmax } else { 1.0 };
+    let mut chart = ChartBuilder::on(&root)
+        .caption(
+            format!("t = {time:.4}: grains coloured by speed, 0 (purple) .. {vmax:.3e} {velocity_unit} (yellow)"),
+            ("sans-serif", 16),
+        )
+        .margin(10)
+        .x_label_area_size(30)
+        .y_label_area_size(50)
+        .build_cartesian_2d(x0..x1, y0..y1)?;
+    chart.configure_mesh().disable_mesh().draw()?;
+    let polygons = w.particles.iter().zip(&speed).map(|(p, &v)| {
+        let (a, b) = p.shape.semi_axes();
+        let (c, s) = (p.angle.cos(), p.angle.sin());
+        let pts: Vec<(f64, f64)> = (0..24)
+            .map(|m| {
+                let t = m as f64 * std::f64::consts::TAU / 24.0;
+                let (u, v) = (a * t.cos(), b * t.sin());
+                (p.position[0] + u * c - v * s, p.position[1] + u * s + v * c)
+            })
+            .collect();
+        Polygon::new(pts, colormap(v / scale).filled())
+    });
+    chart.draw_series(polygons)?;
     root.present()?;
     Ok(())
 }

@@ -18,8 +18,9 @@
 //! pressure), `centerline_pressure.csv` and `centerline_speed.csv` (time × distance along the sample's centre
 //! line, fig. 6.13–6.14), `breaks.csv` (every broken bond: time, position, bond-normal and crack-plane angles,
 //! mode, load), `fractures.csv` (broken bonds clustered into fractures: size, centre, trace angle, length),
-//! VTK snapshots (`lattice_NNNN.vtk`, `particles_NNNN.vtk`, `bonds_NNNN.vtk`), PNG figures
-//! (`snapshot_NNNN.png` like fig. 6.8, `centerline_pressure.png`, `centerline_speed.png`, `rose.png` like fig.
+//! VTK snapshots (`lattice_NNNN.vti`, `particles_NNNN.vtp`, `bonds_NNNN.vtp`, grouped with their model times in
+//! `lattice.pvd`, `particles.pvd`, `bonds.pvd`; docs/outputs.md), PNG figures (`snapshot_NNNN.png` like fig. 6.8,
+//! `speed_NNNN.png` like fig. 6.9, `centerline_pressure.png`, `centerline_speed.png`, `rose.png` like fig.
 //! 6.10/6.15, `breaks.png`) and `summary.json` (written last).
 pub mod analysis;
 pub mod figures;
@@ -45,7 +46,10 @@ use crate::observe::darcy::{permeability, SteadyFlow};
 use crate::observe::fit::fit_diffusivity;
 use crate::observe::health::dem_health;
 use crate::observe::steady::Steadiness;
-use crate::output::vtk::{bonds_vtk, lattice_vtk, particles_vtk, Field};
+use crate::output::pvd::write_snapshot;
+use crate::output::vtk::{
+    bonds_vtp, lattice_vti, node_kinds, particles_vtp, BreakClock, Field, Stamp, Units,
+};
 use crate::output::{csv, write_atomic, SCENE_COPY};
 use crate::run::{Case, CheckpointInterval, Kind, OutputStage, Persist};
 use crate::scene::solid::grain_count;
@@ -1318,11 +1322,21 @@ impl<'a, S: std::ops::DerefMut<Target = FractureState>> FractureRun<'a, S> {
             .clone()
             .unwrap_or_else(|| "lbdem fracture".into());
         let broken = d.broken_bond_fraction();
+        let stamp = Stamp {
+            time: self.state.steps_done as f64 * self.state.dt,
+            title,
+            units: Units::of(self.scene.scene.units),
+        };
         if self.scene.output.vtk {
-            let text = particles_vtk(&title, &d.particles, &broken);
-            write_atomic(&out.join(format!("particles_{n:04}.vtk")), text.as_bytes())?;
-            let text = bonds_vtk(&title, d);
-            write_atomic(&out.join(format!("bonds_{n:04}.vtk")), text.as_bytes())?;
+            let fluid = self.state.coupled.as_ref().map(|w| w.fluid_loads());
+            let bytes = particles_vtp(&stamp, d, fluid.as_deref());
+            write_snapshot(out, "particles", n, stamp.time, "vtp", &bytes)?;
+            let clock = BreakClock {
+                origin_step: self.state.drop_step,
+                dt: self.state.dt,
+            };
+            let bytes = bonds_vtp(&stamp, d, clock);
+            write_snapshot(out, "bonds", n, stamp.time, "vtp", &bytes)?;
         }
         let field = self.fluid().map(|fp| {
             let (rho, u) = fp.world.fluid.moments();
@@ -1336,25 +1350,33 @@ impl<'a, S: std::ops::DerefMut<Target = FractureState>> FractureRun<'a, S> {
                 .iter()
                 .map(|v| [v[0] * units.lattice_speed, v[1] * units.lattice_speed])
                 .collect();
+            let solid_fraction = fp.world.fluid.solid_fraction_map();
+            let node_kind = node_kinds(&fp.world.fluid, &solid_fraction);
             Field {
                 nodes: fp.setup.nodes,
                 origin: fp.world.map.origin,
                 spacing: units.spacing,
                 pressure,
                 velocity,
-                solid_fraction: fp.world.fluid.solid_fraction_map(),
+                solid_fraction,
+                node_kind,
             }
         });
         if self.scene.output.vtk {
             if let Some(f) = &field {
-                let bytes = lattice_vtk(&title, f);
-                write_atomic(&out.join(format!("lattice_{n:04}.vtk")), &bytes)?;
+                let bytes = lattice_vti(&stamp, f);
+                write_snapshot(out, "lattice", n, stamp.time, "vti", &bytes)?;
             }
         }
         if self.scene.output.figures {
             let time = self.state.steps_done as f64 * self.state.dt;
             let png = out.join(format!("snapshot_{n:04}.png"));
             if let Err(e) = figures::snapshot_png(&png, d, &broken, field.as_ref(), time) {
+                eprintln!("lbdem: WARNING: figure {} not drawn: {e}", png.display());
+            }
+            let png = out.join(format!("speed_{n:04}.png"));
+            let unit = self.scene.scene.units.labels().velocity;
+            if let Err(e) = figures::speed_png(&png, d, time, unit) {
                 eprintln!("lbdem: WARNING: figure {} not drawn: {e}", png.display());
             }
         }

@@ -1,0 +1,284 @@
+"""Read every VTK output of an lbdem run directory back with the real VTK library and check it.
+
+Usage: python3 vtk_readback.py RUN_DIR
+
+Run by driver/tests/vtk_readback.rs on the run directories of tiny scenes (see docs/outputs.md). For every
+`.pvd` collection: the listed files exist and are read by VTK's XML readers (the readers ParaView uses), times
+are finite and increasing and equal to each file's TIME field data; every array has its documented name,
+component count and tuple count (points or cells) and finite values, and every physical array names its unit.
+Then values against the run's own tables: grains and bonds counted as in summary.json, recorded break times
+and modes equal to breaks.csv / broken_bonds.csv, the kinetic energy of the last grain snapshot against
+history.csv, the lattice's centre-line pressure and maximum fluid speed of the last snapshot against
+centerline_pressure.csv and history.csv, and the shape tensor drawn by VTK's tensor glyph filter (what
+ParaView's Tensor Glyph runs) against the true ellipse of a few grains. Exits non-zero with a message on the
+first failure; prints one line per checked file otherwise.
+"""
+import csv
+import json
+import math
+import os
+import re
+import sys
+import xml.etree.ElementTree as ET
+
+import vtk
+from vtk.util.numpy_support import vtk_to_numpy  # noqa: F401  (numpy ships with the vtk wheel's deps)
+import numpy as np
+
+# Array name -> components, for each series (docs/outputs.md lists the same).
+PARTICLE_ARRAYS = {
+    "speed": 1, "velocity": 3, "shape_tensor": 9, "id": 1, "angular_velocity": 1, "orientation": 1,
+    "major_axis": 3, "semi_axes": 3, "glyph_scale": 3, "mass": 1, "moment_of_inertia": 1, "contact_force": 3, "contact_count": 1,
+    "bonds": 1, "broken_bond_fraction": 1,
+}
+PARTICLE_FLUID_ARRAYS = {"fluid_force": 3, "fluid_torque": 1}
+BOND_ARRAYS = {
+    "intact": 1, "id": 1, "pair": 2, "break_mode": 1, "break_time": 1, "normal_force": 1,
+    "shear_force": 1, "stretch": 1, "strength_ratio": 1,
+}
+LATTICE_ARRAYS = {"pressure": 1, "velocity": 3, "solid_fraction": 1, "node_kind": 1}
+# Arrays without a unit (indices, counts, codes).
+UNITLESS = {"id", "contact_count", "bonds", "intact", "pair", "break_mode", "node_kind"}
+
+
+def fail(msg):
+    print(f"vtk_readback: FAIL: {msg}", file=sys.stderr)
+    sys.exit(1)
+
+
+def check(cond, msg):
+    if not cond:
+        fail(msg)
+
+
+def arr(data, name):
+    a = data.GetArray(name)
+    check(a is not None, f"array {name} missing")
+    return vtk_to_numpy(a)
+
+
+def read(path):
+    if path.endswith(".vtp"):
+        r = vtk.vtkXMLPolyDataReader()
+    elif path.endswith(".vti"):
+        r = vtk.vtkXMLImageDataReader()
+    else:
+        fail(f"{path}: unexpected extension")
+    check(r.CanReadFile(path), f"{path}: VTK cannot read it")
+    r.SetFileName(path)
+    r.Update()
+    check(r.GetErrorCode() == 0, f"{path}: VTK read error {r.GetErrorCode()}")
+    return r.GetOutput()
+
+
+def field_strings(obj, name):
+    a = obj.GetFieldData().GetAbstractArray(name)
+    check(a is not None, f"field data {name} missing")
+    return [a.GetValue(i) for i in range(a.GetNumberOfValues())]
+
+
+def check_arrays(path, data, expected, tuples, units):
+    names = [data.GetArrayName(i) for i in range(data.GetNumberOfArrays())]
+    check(sorted(names) == sorted(expected), f"{path}: arrays {sorted(names)}, expected {sorted(expected)}")
+    for name, comps in expected.items():
+        a = data.GetArray(name)
+        check(a.GetNumberOfComponents() == comps, f"{path}: {name} has {a.GetNumberOfComponents()} components, expected {comps}")
+        check(a.GetNumberOfTuples() == tuples, f"{path}: {name} has {a.GetNumberOfTuples()} tuples, expected {tuples}")
+        check(np.all(np.isfinite(vtk_to_numpy(a).astype(float))), f"{path}: {name} holds non-finite values")
+        if name not in UNITLESS:
+            check(name in units and units[name], f"{path}: no unit named for {name} (units: {units})")
+
+
+def read_csv(path):
+    with open(path) as f:
+        rows = list(csv.reader(f))
+    return rows[0], rows[1:]
+
+
+def collection(run, series):
+    path = os.path.join(run, f"{series}.pvd")
+    check(os.path.exists(path), f"{path} missing")
+    root = ET.parse(path).getroot()
+    check(root.get("type") == "Collection", f"{path}: not a Collection")
+    entries = [(float(d.get("timestep")), d.get("file")) for d in root.iter("DataSet")]
+    check(len(entries) >= 2, f"{path}: {len(entries)} snapshots")
+    times = [t for t, _ in entries]
+    check(all(math.isfinite(t) for t in times), f"{path}: non-finite times")
+    check(all(b > a for a, b in zip(times, times[1:])), f"{path}: times not increasing: {times}")
+    on_disk = sorted(f for f in os.listdir(run) if f.startswith(series + "_") and f.endswith((".vtp", ".vti")))
+    check(sorted(f for _, f in entries) == on_disk, f"{path} lists {[f for _, f in entries]}, on disk {on_disk}")
+    out = []
+    for t, f in entries:
+        full = os.path.join(run, f)
+        obj = read(full)
+        time = obj.GetFieldData().GetArray("TIME")
+        check(time is not None and time.GetValue(0) == t, f"{full}: TIME field data differs from the .pvd time {t}")
+        units = dict(s.split("=", 1) for s in field_strings(obj, "units"))
+        out.append((t, full, obj, units))
+    return out
+
+
+def ellipse_half_extent(a, b, theta):
+    c, s = math.cos(theta), math.sin(theta)
+    return math.sqrt((a * c) ** 2 + (b * s) ** 2), math.sqrt((a * s) ** 2 + (b * c) ** 2)
+
+
+def check_glyphs(path, grains):
+    """ParaView's Tensor Glyph (vtkTensorGlyph, sphere of diameter 1, scale factor 1, eigenvalues extracted)
+    must draw each grain's true ellipse: its x and y extents are those of the ellipse."""
+    pd = grains.GetPointData()
+    tensor = pd.GetArray("shape_tensor")
+    axes = arr(pd, "semi_axes")
+    theta = arr(pd, "orientation")
+    for i in range(min(5, grains.GetNumberOfPoints())):
+        one = vtk.vtkPolyData()
+        pts = vtk.vtkPoints()
+        pts.InsertNextPoint(grains.GetPoint(i))
+        one.SetPoints(pts)
+        t = vtk.vtkDoubleArray()
+        t.SetNumberOfComponents(9)
+        t.InsertNextTuple(tensor.GetTuple(i))
+        one.GetPointData().SetTensors(t)
+        sphere = vtk.vtkSphereSource()
+        sphere.SetThetaResolution(256)
+        sphere.SetPhiResolution(128)
+        g = vtk.vtkTensorGlyph()
+        g.SetInputData(one)
+        g.SetSourceConnection(sphere.GetOutputPort())
+        g.Update()
+        b = g.GetOutput().GetBounds()
+        hx, hy = ellipse_half_extent(axes[i][0], axes[i][1], theta[i])
+        x, y, _ = grains.GetPoint(i)
+        # The tessellated sphere lies inside the true one: its extent is short by at most 1 - cos(pi/128) of a
+        # radius (128 segments per half circle) ~ 3e-4; 1e-3 of the semi-major axis bounds that.
+        tol = 1e-3 * axes[i][0]
+        for got, want in [(b[0], x - hx), (b[1], x + hx), (b[2], y - hy), (b[3], y + hy)]:
+            check(abs(got - want) <= tol, f"{path}: tensor glyph of grain {i} spans {b[:4]}, the ellipse {x - hx, x + hx, y - hy, y + hy}")
+
+
+def main(run):
+    summary = json.load(open(os.path.join(run, "summary.json")))
+    kind = summary["kind"] if "kind" in summary else summary.get("scene", {}).get("kind")
+    res = summary["results"]
+    fracture = os.path.exists(os.path.join(run, "history.csv"))
+    particles = res["packing"]["particles"] if fracture else res["particles"]
+    bonds_total = res["total_bonds"] if fracture else res["bonds"]
+    coupled = fracture and res.get("fluid") is not None
+
+    # Grains.
+    snaps = collection(run, "particles")
+    expected = dict(PARTICLE_ARRAYS, **(PARTICLE_FLUID_ARRAYS if coupled else {}))
+    for t, path, obj, units in snaps:
+        check(obj.GetNumberOfPoints() == particles, f"{path}: {obj.GetNumberOfPoints()} grains, summary.json says {particles}")
+        check(obj.GetNumberOfVerts() == particles, f"{path}: {obj.GetNumberOfVerts()} vertex cells")
+        check_arrays(path, obj.GetPointData(), expected, particles, units)
+        pd = obj.GetPointData()
+        v = arr(pd, "velocity")
+        check(np.allclose(arr(pd, "speed"), np.hypot(v[:, 0], v[:, 1]), rtol=1e-12, atol=0), f"{path}: speed is not |velocity|")
+        check(np.array_equal(arr(pd, "id"), np.arange(particles)), f"{path}: ids are not 0..n-1")
+        print(f"vtk_readback: {os.path.basename(path)}: {particles} grains, {len(expected)} arrays, t = {t:g} s")
+    t_last, path, grains, _ = snaps[-1]
+    check_glyphs(path, grains)
+    if fracture:
+        header, rows = read_csv(os.path.join(run, "history.csv"))
+        last = dict(zip(header, map(float, rows[-1])))
+        check(abs(last["time"] - t_last) <= 1e-12 * max(1.0, t_last), f"last history row at {last['time']}, last snapshot at {t_last}")
+        pd = grains.GetPointData()
+        m, v, w = arr(pd, "mass"), arr(pd, "velocity"), arr(pd, "angular_velocity")
+        inertia = np.where(arr(pd, "moment_of_inertia") < 0, 0.0, arr(pd, "moment_of_inertia"))
+        ke = 0.5 * np.sum(m * (v[:, 0] ** 2 + v[:, 1] ** 2) + inertia * w ** 2)
+        # The same f64 values summed in another order (a few ulps); history.csv prints 11 significant digits.
+        check(abs(ke - last["kinetic_energy"]) <= 1e-9 * abs(last["kinetic_energy"]) + 1e-300,
+              f"{path}: kinetic energy {ke}, history.csv {last['kinetic_energy']}")
+        print(f"vtk_readback: kinetic energy of the last snapshot {ke:.6e} = history.csv {last['kinetic_energy']:.6e}")
+
+    # Bonds.
+    snaps = collection(run, "bonds")
+    for t, path, obj, units in snaps:
+        check(obj.GetNumberOfLines() == bonds_total, f"{path}: {obj.GetNumberOfLines()} bond lines, summary.json says {bonds_total}")
+        check(obj.GetNumberOfPoints() == particles, f"{path}: {obj.GetNumberOfPoints()} points")
+        check_arrays(path, obj.GetCellData(), BOND_ARRAYS, bonds_total, units)
+        cd = obj.GetCellData()
+        intact, mode = arr(cd, "intact"), arr(cd, "break_mode")
+        check(np.array_equal(intact == 1, mode == 0), f"{path}: break_mode 0 is not exactly the intact bonds")
+        pairs = arr(cd, "pair")
+        lines = obj.GetLines()
+        ids = vtk.vtkIdList()
+        lines.InitTraversal()
+        k = 0
+        while lines.GetNextCell(ids):
+            check((ids.GetId(0), ids.GetId(1)) == tuple(pairs[k]), f"{path}: line {k} joins {ids.GetId(0)}, {ids.GetId(1)}; pair says {pairs[k]}")
+            k += 1
+        print(f"vtk_readback: {os.path.basename(path)}: {bonds_total} bonds ({int(np.sum(intact == 0))} broken), t = {t:g} s")
+    t, path, obj, _ = snaps[-1]
+    cd = obj.GetCellData()
+    mode, when = arr(cd, "break_mode"), arr(cd, "break_time")
+    recorded = (mode >= 1) & (mode <= 3)
+    names = {1: "tension", 2: "shear", 3: "compression"}
+    if fracture:
+        header, rows = read_csv(os.path.join(run, "breaks.csv"))
+        table = sorted((float(r[header.index("time")]), r[header.index("mode")]) for r in rows)
+    else:
+        header, rows = read_csv(os.path.join(run, "broken_bonds.csv"))
+        table = sorted((float(r[header.index("time")]), r[header.index("mode")]) for r in rows)
+    ours = sorted((float(x), names[int(mm)]) for x, mm in zip(when[recorded], mode[recorded]))
+    check(len(ours) == len(table) == res["broken_bonds"], f"{path}: {len(ours)} recorded breaks, table {len(table)}, summary {res['broken_bonds']}")
+    for (ta, ma), (tb, mb) in zip(ours, table):
+        # The CSV prints 10 significant digits.
+        check(ma == mb and abs(ta - tb) <= 1e-9 * max(abs(tb), 1e-12), f"{path}: break ({ta}, {ma}) vs table ({tb}, {mb})")
+    print(f"vtk_readback: {len(ours)} recorded breaks: times and modes equal the break table")
+
+    # Lattice.
+    if coupled:
+        snaps = collection(run, "lattice")
+        nx, ny = res["fluid"]["nodes"]
+        for t, path, obj, units in snaps:
+            dims = obj.GetDimensions()
+            check(tuple(dims) == (nx, ny, 1), f"{path}: dimensions {dims}, summary.json nodes {nx} x {ny}")
+            check_arrays(path, obj.GetPointData(), LATTICE_ARRAYS, nx * ny, units)
+            eps = arr(obj.GetPointData(), "solid_fraction")
+            check(np.all((eps >= 0) & (eps <= 1)), f"{path}: solid fraction outside [0, 1]")
+            kinds = arr(obj.GetPointData(), "node_kind")
+            check(set(np.unique(kinds)) <= {0, 1, 2, 3}, f"{path}: node kinds {np.unique(kinds)}")
+            check(np.array_equal(kinds == 1, (eps > 0) & (kinds != 3) & (kinds != 2)), f"{path}: node_kind 1 is not the covered nodes")
+            print(f"vtk_readback: {os.path.basename(path)}: {nx} x {ny} nodes, t = {t:g} s")
+        t, path, obj, _ = snaps[-1]
+        pd = obj.GetPointData()
+        p = arr(pd, "pressure").astype(float).reshape(ny, nx)
+        u = arr(pd, "velocity").astype(float).reshape(ny, nx, 3)
+        eps = arr(pd, "solid_fraction").astype(float).reshape(ny, nx)
+        speed = np.hypot(u[..., 0], u[..., 1])
+        header, rows = read_csv(os.path.join(run, "history.csv"))
+        last = dict(zip(header, map(float, rows[-1])))
+        vmax = float(np.max(speed[eps < 1.0]))
+        # The file stores float32: 2^-24 relative rounding of each velocity component (and of ε near 1).
+        check(abs(vmax - last["max_fluid_speed"]) <= 1e-6 * last["max_fluid_speed"] + 1e-30,
+              f"{path}: max fluid speed {vmax}, history.csv {last['max_fluid_speed']}")
+        # Centre line: the fluid-fraction-weighted mean over rows within one largest grain radius of the centre row
+        # (as the run computes it for centerline_pressure.csv).
+        scene = open(os.path.join(run, "scene.toml")).read()
+        radius_max = float(re.search(r"(?m)^\s*radius_max\s*=\s*([-+0-9.eE]+)", scene).group(1))
+        spacing = float(re.search(r"(?m)^\s*spacing\s*=\s*([-+0-9.eE]+)", scene).group(1))
+        # Rust's f64::round (halves away from zero) of this positive ratio.
+        half = max(1, int(math.floor(radius_max / spacing + 0.5)))
+        row = ny // 2
+        ya, yb = max(0, row - half), min(ny - 1, row + half)
+        wgt = 1.0 - eps[ya:yb + 1, :]
+        with np.errstate(invalid="ignore", divide="ignore"):
+            line = np.sum(wgt * p[ya:yb + 1, :], axis=0) / np.sum(wgt, axis=0)
+        header, rows = read_csv(os.path.join(run, "centerline_pressure.csv"))
+        table = np.array([float(x) for x in rows[-1][1:]])
+        check(len(table) == nx, f"centerline_pressure.csv has {len(table)} columns of x, the lattice {nx}")
+        ok = np.isfinite(table)
+        scale = float(np.max(np.abs(p)))
+        # float32 pressure and ε in the file: each term off by ~6e-8 of the largest pressure.
+        err = float(np.max(np.abs(line[ok] - table[ok])))
+        check(err <= 1e-6 * scale, f"{path}: centre-line pressure differs from centerline_pressure.csv by {err} (scale {scale})")
+        print(f"vtk_readback: centre-line pressure and max fluid speed of the last lattice snapshot match the tables (max diff {err:.2e})")
+    print(f"vtk_readback: OK {run} ({kind})")
+
+
+if __name__ == "__main__":
+    if len(sys.argv) != 2:
+        fail("usage: vtk_readback.py RUN_DIR")
+    main(sys.argv[1])

@@ -1,0 +1,320 @@
+//! The snapshot writers (`lbdem::output::vtk`, `lbdem::output::pvd`) against the engine state, without Python:
+//! what they write is parsed back (`parse_vtk_xml`) and compared with the world's own numbers and with
+//! independent physics (a point bond stretched by a known amount, the ellipse a shape tensor stands for,
+//! Newton's third law on the contact forces). The real VTK library reads the same files in `vtk_readback.rs`.
+use lbdem::engine::dem::*;
+use lbdem::output::pvd;
+use lbdem::output::vtk::*;
+use lbdem::units::UnitSystem;
+use lbdem_kernels::dem::assembly::ContactModel;
+use lbdem_kernels::dem::shape::Particle;
+
+fn model() -> ContactModel<f64> {
+    ContactModel {
+        normal_stiffness: 1e5,
+        shear_stiffness: 1e5,
+        friction: 0.5,
+        restitution: 1.0,
+        no_tension: true,
+    }
+}
+
+fn stamp(time: f64) -> Stamp {
+    Stamp {
+        time,
+        title: "writer test <&>".into(),
+        units: Units::of(UnitSystem::Cgs),
+    }
+}
+
+/// A squeezed, bonded block of discs after some steps: contacts, bonds carrying load, some broken.
+fn loaded_block() -> Packing<f64> {
+    let particles = hexagonal_packing(8, 8, 0.09, 1.0, 0.02, 2.65, 7);
+    let mut p = boxed_sample(
+        particles,
+        model(),
+        5e-5,
+        Some(BondSpec::Point {
+            stiffness: 1e5,
+            strength: 40.0,
+        }),
+        0.005,
+    )
+    .unwrap();
+    let b = p.sample_box;
+    p.world.platens[b.top].control = PlatenControl::Speed(2.0);
+    p.world.platens[b.bottom].control = PlatenControl::Speed(2.0);
+    for _ in 0..300 {
+        p.world.step();
+    }
+    p
+}
+
+fn values<'a>(v: &'a ParsedVtk, name: &str) -> &'a [f64] {
+    &v.point(name)
+        .or_else(|| v.cell(name))
+        .unwrap_or_else(|| panic!("array {name} missing"))
+        .values
+}
+
+#[test]
+fn particle_file_holds_the_engine_state_exactly() {
+    let p = loaded_block();
+    let w = &p.world;
+    let n = w.particles.len();
+    let fluid: Vec<([f64; 2], f64)> = (0..n)
+        .map(|i| ([i as f64 * 0.5, -(i as f64)], 0.25 * i as f64))
+        .collect();
+    let bytes = particles_vtp(&stamp(0.125), w, Some(&fluid));
+    let v = parse_vtk_xml(&bytes).expect("parses");
+    assert_eq!(v.kind, "PolyData");
+    assert_eq!(v.time(), Some(0.125));
+    assert_eq!(v.field("source").unwrap().strings, ["writer test <&>"]);
+    assert_eq!(v.points.len(), n);
+    assert_eq!(v.cells, (0..n).map(|i| vec![i]).collect::<Vec<_>>());
+    // Every array: n tuples, finite, and a unit for each physical one.
+    for a in &v.point_data {
+        assert_eq!(a.values.len(), n * a.components, "{}", a.name);
+        assert!(a.values.iter().all(|x| x.is_finite()), "{}", a.name);
+    }
+    assert_eq!(v.unit("velocity"), Some("cm/s"));
+    assert_eq!(v.unit("contact_force"), Some("dyne"));
+    assert_eq!(v.unit("fluid_torque"), Some("dyne*cm"));
+    assert_eq!(v.unit("mass"), Some("g"));
+    assert_eq!(v.unit("moment_of_inertia"), Some("g*cm^2"));
+    assert_eq!(v.unit("id"), None);
+    // Raw little-endian f64: bitwise the engine's numbers.
+    let vel = values(&v, "velocity");
+    let ang = values(&v, "angular_velocity");
+    let theta = values(&v, "orientation");
+    let mass = values(&v, "mass");
+    let ff = values(&v, "fluid_force");
+    let ft = values(&v, "fluid_torque");
+    for (i, q) in w.particles.iter().enumerate() {
+        assert_eq!(v.points[i], [q.position[0], q.position[1], 0.0]);
+        assert_eq!(&vel[3 * i..3 * i + 3], &[q.velocity[0], q.velocity[1], 0.0]);
+        assert_eq!(ang[i], q.angular_velocity);
+        assert_eq!(theta[i], q.angle);
+        assert_eq!(mass[i], q.mass);
+        assert_eq!(values(&v, "moment_of_inertia")[i], q.moment_of_inertia);
+        assert_eq!(&ff[3 * i..3 * i + 2], &fluid[i].0);
+        assert_eq!(ft[i], fluid[i].1);
+    }
+    let speed = values(&v, "speed");
+    assert!(speed.iter().any(|&s| s > 0.0), "the block moves");
+    // Contacts: each counted once per grain, forces equal and opposite (third law: they sum to ~0).
+    let count: f64 = values(&v, "contact_count").iter().sum();
+    assert_eq!(count as usize, 2 * w.active_contacts());
+    assert!(w.active_contacts() > 0);
+    let cf = values(&v, "contact_force");
+    let (sx, sy): (f64, f64) =
+        (0..n).fold((0.0, 0.0), |(x, y), i| (x + cf[3 * i], y + cf[3 * i + 1]));
+    let scale: f64 = (0..n).map(|i| cf[3 * i].hypot(cf[3 * i + 1])).sum();
+    assert!(scale > 0.0);
+    // Summing ~200 pair forces: roundoff of a few ulps of the total magnitude.
+    assert!(
+        sx.hypot(sy) <= 1e-12 * scale,
+        "contact forces sum to ({sx}, {sy})"
+    );
+    // Bonds per grain and the broken fraction agree with the bond list.
+    let bonds = values(&v, "bonds");
+    assert_eq!(bonds.iter().sum::<f64>() as usize, 2 * w.bonds.len());
+    assert_eq!(values(&v, "broken_bond_fraction"), w.broken_bond_fraction());
+}
+
+#[test]
+fn shape_tensor_and_glyph_scale_describe_the_true_ellipse() {
+    // An ellipse at 30°: the tensor's eigenvectors are the body axes, its eigenvalues the full axes 2a, 2b
+    // (ParaView's Tensor Glyph scales a unit-diameter sphere by them), and the out-of-plane one 2b.
+    let q = Particle::ellipse([1.0, 2.0], 30f64.to_radians(), 0.3, 0.1, 2.65);
+    let w = DemWorld::new(vec![q], model(), 1e-5).unwrap();
+    let v = parse_vtk_xml(&particles_vtp(&stamp(0.0), &w, None)).unwrap();
+    let t = values(&v, "shape_tensor");
+    let (s, c) = 30f64.to_radians().sin_cos();
+    let apply = |x: [f64; 3]| -> [f64; 3] {
+        [
+            t[0] * x[0] + t[1] * x[1] + t[2] * x[2],
+            t[3] * x[0] + t[4] * x[1] + t[5] * x[2],
+            t[6] * x[0] + t[7] * x[1] + t[8] * x[2],
+        ]
+    };
+    for (axis, lambda) in [
+        ([c, s, 0.0], 0.6),
+        ([-s, c, 0.0], 0.2),
+        ([0.0, 0.0, 1.0], 0.2),
+    ] {
+        let y = apply(axis);
+        for k in 0..3 {
+            // Products of O(1) numbers: roundoff only.
+            assert!(
+                (y[k] - lambda * axis[k]).abs() < 1e-14,
+                "T·e = {y:?}, λ = {lambda}"
+            );
+        }
+    }
+    assert_eq!(values(&v, "glyph_scale"), [0.6, 0.2, 0.2]);
+    assert_eq!(values(&v, "semi_axes"), [0.3, 0.1, 0.0]);
+    let m = values(&v, "major_axis");
+    assert!((m[0] - c).abs() < 1e-15 && (m[1] - s).abs() < 1e-15);
+    // No fluid: no fluid arrays; no step yet: the contact loads are written as zeros (with a warning).
+    assert!(v.point("fluid_force").is_none());
+    assert_eq!(values(&v, "contact_count"), [0.0]);
+}
+
+#[test]
+fn point_bond_stretched_by_a_known_amount() {
+    // Two discs bonded at touch, then j moved 1e-3 cm away along the bond: eq. 6.13 gives a tensile force
+    // k_b δ on each (normal force −k_b δ, compression positive), no shear, stretch δ.
+    let (r, k, strength) = (0.1, 1e5, 700.0);
+    let a = Particle::disc([0.0, 0.0], r, 2.65);
+    let b = Particle::disc([2.0 * r, 0.0], r, 2.65);
+    let mut w = DemWorld::new(vec![a, b], model(), 1e-5).unwrap();
+    w.bond_touching_pairs(
+        BondSpec::Point {
+            stiffness: k,
+            strength,
+        },
+        1e-6,
+    )
+    .unwrap();
+    assert_eq!(w.bonds.len(), 1);
+    let delta = 1e-3;
+    w.particles[1].position[0] += delta;
+    let clock = BreakClock {
+        origin_step: 0,
+        dt: 1e-5,
+    };
+    let v = parse_vtk_xml(&bonds_vtp(&stamp(0.5), &w, clock)).unwrap();
+    assert_eq!(v.cells, vec![vec![0, 1]]);
+    assert_eq!(values(&v, "pair"), [0.0, 1.0]);
+    assert_eq!(values(&v, "intact"), [1.0]);
+    assert_eq!(values(&v, "break_mode"), [0.0]);
+    assert_eq!(values(&v, "break_time"), [-1.0]);
+    // Differences of positions of size 0.2 cm: roundoff of ~1e-16 cm on δ = 1e-3 cm, i.e. ~1e-13 relative.
+    let rel = |x: f64, y: f64| (x - y).abs() <= 1e-10 * y.abs();
+    assert!(
+        rel(values(&v, "stretch")[0], delta),
+        "{:?}",
+        values(&v, "stretch")
+    );
+    assert!(rel(values(&v, "normal_force")[0], -k * delta));
+    assert!(values(&v, "shear_force")[0].abs() < 1e-9);
+    assert!(rel(values(&v, "strength_ratio")[0], k * delta / strength));
+    assert_eq!(v.unit("normal_force"), Some("dyne"));
+    assert_eq!(v.unit("stretch"), Some("cm"));
+    assert_eq!(v.unit("break_time"), Some("s"));
+}
+
+#[test]
+fn broken_bonds_carry_their_break_time_and_mode() {
+    let p = loaded_block();
+    let w = &p.world;
+    assert!(!w.breaks.is_empty(), "the squeeze breaks bonds");
+    let clock = BreakClock {
+        origin_step: 100,
+        dt: 5e-5,
+    };
+    let v = parse_vtk_xml(&bonds_vtp(&stamp(1.0), w, clock)).unwrap();
+    let m = w.bonds.len();
+    assert_eq!(v.cells.len(), m);
+    for a in &v.cell_data {
+        assert_eq!(a.values.len(), m * a.components, "{}", a.name);
+        assert!(a.values.iter().all(|x| x.is_finite()), "{}", a.name);
+    }
+    let (mode, time, intact) = (
+        values(&v, "break_mode"),
+        values(&v, "break_time"),
+        values(&v, "intact"),
+    );
+    for rec in &w.breaks {
+        let k = w.bonds.iter().position(|b| b.pair == rec.pair).unwrap();
+        assert_eq!(intact[k], 0.0);
+        assert_eq!(mode[k], break_mode_code(rec.mode) as f64);
+        assert_eq!(time[k], rec.step.saturating_sub(100) as f64 * 5e-5);
+        // A broken bond carries nothing.
+        assert_eq!(values(&v, "normal_force")[k], 0.0);
+    }
+    let broken = intact.iter().filter(|&&x| x == 0.0).count();
+    assert_eq!(broken, w.bonds.len() - w.intact_bonds());
+    // Intact bonds are loaded; broken ones have ratio 0.
+    let ratio = values(&v, "strength_ratio");
+    assert!(ratio.iter().zip(intact).any(|(&r, &i)| i == 1.0 && r > 0.0));
+    assert!(ratio
+        .iter()
+        .zip(intact)
+        .all(|(&r, &i)| i == 1.0 || r == 0.0));
+}
+
+#[test]
+fn lattice_file_holds_the_field() {
+    let (nx, ny) = (5, 3);
+    let f = Field {
+        nodes: [nx, ny],
+        origin: [-0.5, 0.25],
+        spacing: 0.01,
+        pressure: (0..nx * ny).map(|k| k as f64 * 1.5).collect(),
+        velocity: (0..nx * ny).map(|k| [k as f64, -(k as f64)]).collect(),
+        solid_fraction: (0..nx * ny).map(|k| (k % 3) as f64 * 0.5).collect(),
+        node_kind: (0..nx * ny).map(|k| (k % 4) as u8).collect(),
+    };
+    let v = parse_vtk_xml(&lattice_vti(&stamp(2.5), &f)).unwrap();
+    assert_eq!(v.kind, "ImageData");
+    assert_eq!(v.attributes["WholeExtent"], "0 4 0 2 0 0");
+    let origin: Vec<f64> = v.attributes["Origin"]
+        .split(' ')
+        .map(|x| x.parse().unwrap())
+        .collect();
+    assert_eq!(origin, [-0.5, 0.25, 0.0]);
+    assert_eq!(v.time(), Some(2.5));
+    // Float32 in the file: these small integers and halves are exact in f32.
+    assert_eq!(values(&v, "pressure"), f.pressure);
+    let vel: Vec<f64> = f.velocity.iter().flat_map(|u| [u[0], u[1], 0.0]).collect();
+    assert_eq!(values(&v, "velocity"), vel);
+    assert_eq!(values(&v, "solid_fraction"), f.solid_fraction);
+    let kinds: Vec<f64> = f.node_kind.iter().map(|&k| k as f64).collect();
+    assert_eq!(values(&v, "node_kind"), kinds);
+    assert_eq!(v.unit("pressure"), Some("dyne/cm^2"));
+    assert_eq!(v.unit("solid_fraction"), Some("1"));
+}
+
+#[test]
+fn collection_lists_the_snapshots_so_far_and_a_resume_rewrites_it() {
+    let dir = std::env::temp_dir().join(format!("lbdem-pvd-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    for (i, t) in [0.0, 0.05, 0.1].into_iter().enumerate() {
+        pvd::write_snapshot(&dir, "particles", i, t, "vtp", b"x").unwrap();
+    }
+    let read = || pvd::parse(&std::fs::read_to_string(dir.join("particles.pvd")).unwrap()).unwrap();
+    let e = read();
+    assert_eq!(
+        e.iter()
+            .map(|e| (e.time, e.file.as_str()))
+            .collect::<Vec<_>>(),
+        [
+            (0.0, "particles_0000.vtp"),
+            (0.05, "particles_0001.vtp"),
+            (0.1, "particles_0002.vtp")
+        ]
+    );
+    // A run resumed from a checkpoint taken after snapshot 0 writes snapshot 1 again: the collection then
+    // lists 0 and 1 only, until the resumed run writes 2.
+    pvd::record(&dir, "particles", 1, 0.05, "particles_0001.vtp").unwrap();
+    assert_eq!(read().len(), 2);
+    assert_eq!(read()[1].time, 0.05);
+    assert!(
+        !dir.join("particles.pvd.tmp").exists(),
+        "written atomically"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn parser_refuses_damaged_files() {
+    let p = loaded_block();
+    let bytes = particles_vtp(&stamp(0.0), &p.world, None);
+    // Truncated: the last arrays run past the end.
+    assert!(parse_vtk_xml(&bytes[..bytes.len() - 100]).is_err());
+    // Not a VTK XML file with appended data.
+    assert!(parse_vtk_xml(b"# vtk DataFile Version 3.0\n").is_err());
+}
