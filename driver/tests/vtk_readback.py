@@ -22,8 +22,8 @@ import sys
 import xml.etree.ElementTree as ET
 
 import vtk
-from vtk.util.numpy_support import vtk_to_numpy  # noqa: F401  (numpy ships with the vtk wheel's deps)
-import numpy as np
+from vtk.util.numpy_support import vtk_to_numpy
+import numpy as np  # installed with vtk (through its matplotlib dependency)
 
 # Array name -> components, for each series (docs/outputs.md lists the same).
 PARTICLE_ARRAYS = {
