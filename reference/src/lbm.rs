@@ -353,7 +353,7 @@ pub fn psm_with_collision(
 }
 
 /// ΩΛ's friction constant κ (`lbdem_kernels::fluid::collide::LAMBDA_FRICTION`, restated).
-pub const LAMBDA_FRICTION: f64 = 0.95;
+pub const LAMBDA_FRICTION: f64 = 1.27;
 
 /// The magic-parameter-consistent partially saturated collision ΩΛ of one node (see the kernels'
 /// `lambda_collide` for the derivation), written from its definition. `magic` = `None` is BGK (Λ⁻ = Λ⁺);
