@@ -16,7 +16,7 @@ use lbdem_kernels::fluid::aa::{
 use lbdem_kernels::fluid::boundary::{Boundaries, SideCondition, SideProfiles};
 use lbdem_kernels::fluid::collide::{
     psm_collide_links, psm_velocity, Collision, OpenLinks, PsmParams, SolidOperator, SolidShare,
-    Weighting,
+    Weighting, ALL_LINKS_OPEN,
 };
 use lbdem_kernels::fluid::d2q9::{equilibrium, OPPOSITE, Q};
 use lbdem_kernels::fluid::lattice::{LatticeShape, Side};
@@ -219,7 +219,15 @@ fn compute_links<T: Real>(
     bc: &Boundaries<T>,
     flags: &[u8],
     full: &mut Vec<bool>,
+    operator: SolidOperator,
 ) {
+    if operator != SolidOperator::LambdaConsistent {
+        // Only ΩΛ reads the masks: the other operators get "every link open" without the per-node pass, which
+        // would otherwise run at every re-mapping of a coupled step.
+        cov.links.clear();
+        cov.links.resize(cov.nodes.len(), ALL_LINKS_OPEN);
+        return;
+    }
     full.resize(shape.nodes(), false);
     let is_full = |k: usize| -> bool {
         // The sum the collision forms (same order), compared as the collision compares it.
@@ -454,6 +462,7 @@ impl<T: Real> FluidLattice<T> {
                 &self.bc,
                 &self.flags,
                 &mut self.cover_scratch.full,
+                self.solid_operator,
             );
         }
     }
@@ -657,7 +666,14 @@ impl<T: Real> FluidLattice<T> {
         }
         cov.exchange.clear();
         cov.exchange.resize(total, [T::zero(); 2]);
-        compute_links(&mut cov, &s, &bc, &self.flags, &mut scratch.full);
+        compute_links(
+            &mut cov,
+            &s,
+            &bc,
+            &self.flags,
+            &mut scratch.full,
+            self.solid_operator,
+        );
         self.coverage = Some(cov);
     }
 
@@ -725,6 +741,7 @@ impl<T: Real> FluidLattice<T> {
             &self.bc,
             &self.flags,
             &mut self.cover_scratch.full,
+            self.solid_operator,
         );
         self.coverage = Some(cov);
         Ok(())
@@ -813,6 +830,8 @@ impl<T: Real> FluidLattice<T> {
     /// (`Superposition`) for long runs with pressure boundaries.
     pub fn set_solid_operator(&mut self, op: SolidOperator) {
         self.solid_operator = op;
+        // ΩΛ's open-link masks are only computed while ΩΛ is the operator.
+        self.refresh_links();
     }
 
     /// The solid collision operator of covered nodes.
