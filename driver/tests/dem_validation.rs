@@ -292,7 +292,7 @@ fn boundary_particle_stress_and_servo_platens_hold_their_targets() {
     }
     let top = w.boundary_particles(3, 0.05);
     assert!(top.len() >= 12 && top.len() <= 20, "{}", top.len());
-    w.apply_boundary_stress(&top, [0.0, -1.0], 40.0, width);
+    w.apply_boundary_stress(&top, lbdem_kernels::math::vector(0.0, -1.0), 40.0, width);
     let total: f64 = w.external_force.iter().map(|f| f[1]).sum();
     assert!((total + 40.0 * width).abs() < 1e-9 * 40.0 * width);
     for _ in 0..8000 {
@@ -350,7 +350,7 @@ fn direct_tension(strength: f64, rate: f64) -> (f64, usize) {
             return (stress, w.breaks.len());
         }
         stress += 10.0 * rate;
-        w.apply_boundary_stress(&top, [0.0, 1.0], stress, width);
+        w.apply_boundary_stress(&top, lbdem_kernels::math::vector(0.0, 1.0), stress, width);
     }
     (f64::NAN, w.breaks.len())
 }

@@ -45,7 +45,10 @@ fn scene<T: Real>(band_rows: usize) -> FluidLattice<T> {
     lattice
 }
 
-fn run<T: Real>(threads: usize, band_rows: usize) -> (Vec<T>, Vec<[f64; 2]>) {
+fn run<T: Real>(
+    threads: usize,
+    band_rows: usize,
+) -> (Vec<T>, Vec<lbdem_kernels::math::Vector<f64>>) {
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
         .build()
