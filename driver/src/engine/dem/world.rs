@@ -350,8 +350,10 @@ impl<T: Real> DemWorld<T> {
         let mut count = vec![0u32; n];
         for (&[i, j], f) in self.pairs.iter().zip(&self.contact_forces) {
             if f.normal_force > T::zero() || f.shear_force != T::zero() {
-                add_to(&mut force[i], f.force_on_i);
-                add_to(&mut force[j], f.force_on_j);
+                for (k, sum) in [(i, f.force_on_i), (j, f.force_on_j)] {
+                    force[k][0] += sum[0];
+                    force[k][1] += sum[1];
+                }
                 count[i] += 1;
                 count[j] += 1;
             }
