@@ -327,5 +327,26 @@ fn every_kind_stops_on_a_signal_and_resumes_to_identical_outputs() {
         }
         assert!(sb["segment_first_step"].as_u64().unwrap() >= at, "{kind}");
         assert_eq!(deterministic_part(sa), deterministic_part(sb), "{kind}");
+        // `--overwrite` into the finished run's directory: accepted (every file a run writes is recognised as
+        // an output), and afterwards the directory holds exactly a fresh run's files, byte for byte.
+        let o = lbdem()
+            .args([
+                "run",
+                scene.to_str().unwrap(),
+                "--out",
+                whole.to_str().unwrap(),
+            ])
+            .args(["--quiet", "--overwrite"])
+            .output()
+            .unwrap();
+        assert!(
+            o.status.success(),
+            "{kind}: --overwrite: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        assert!(
+            files(&whole) == fa,
+            "{kind}: --overwrite left a different set of files"
+        );
     }
 }

@@ -70,7 +70,9 @@ pub fn start_run_dir(dir: &Path, scene_text: &str, overwrite: bool) -> Result<()
 /// Extensions of the files lbdem writes into a run directory (tables, figures, snapshots, the summary, the
 /// scene copy, checkpoints, and the temporary files of atomic writes). Every output is a file directly in the
 /// run directory.
-pub const OUTPUT_EXTENSIONS: [&str; 7] = ["csv", "png", "vtk", "json", "bin", "toml", "tmp"];
+pub const OUTPUT_EXTENSIONS: [&str; 10] = [
+    "csv", "png", "vtk", "vtp", "vti", "pvd", "json", "bin", "toml", "tmp",
+];
 
 /// Whether `entry` of a run directory looks like one of lbdem's outputs (a file with an output extension).
 fn is_output(entry: &std::fs::DirEntry) -> bool {
