@@ -81,3 +81,33 @@ fn terzaghi_profiles_within_three_percent_after_start_up() {
         c.rms_over_gamma_load
     );
 }
+
+/// Bad input is refused naming the field (issue 14, *Bad input*): a column shorter than a few grains, a step
+/// above the packing stress, a load that could break the bonds, a bond stiffness without a strength.
+#[test]
+fn bad_terzaghi_scenes_are_refused_naming_the_field() {
+    let refused = |edit: &dyn Fn(&mut TerzaghiScene), field: &str| {
+        let mut s = scene();
+        edit(&mut s);
+        let e = Case::<Terzaghi>::new(s).err().expect("refused").to_string();
+        assert!(e.contains(field), "{field}: {e}");
+    };
+    refused(&|s| s.terzaghi.height = 0.5, "terzaghi.height");
+    refused(&|s| s.terzaghi.load = 60.0, "terzaghi.load");
+    refused(
+        &|s| {
+            s.terzaghi.bond_stiffness = Some(1e5);
+            s.terzaghi.bond_strength = Some(5.0);
+        },
+        "terzaghi.load",
+    );
+    refused(
+        &|s| s.terzaghi.bond_stiffness = Some(1e5),
+        "terzaghi.bond_stiffness",
+    );
+    refused(
+        &|s| s.terzaghi.aspect_ratio = Some(1.5),
+        "terzaghi.aspect_ratio",
+    );
+    refused(&|s| s.terzaghi.fluid_radius = 0.0, "terzaghi.fluid_radius");
+}

@@ -14,9 +14,7 @@ use lbdem_reference::poroelastic::{
 use serde::{Deserialize, Serialize};
 
 use crate::engine::coupled::{CoupledWorld, LatticeMap};
-use crate::engine::dem::loading::{
-    loaded_height, settle_loaded, uniaxial_strain_step, StepLoadResult,
-};
+use crate::engine::dem::loading::{settle_loaded, uniaxial_strain_step, StepLoadResult};
 use crate::engine::dem::packing::{generate_packing, hexagonal_packing, PackingSpec};
 use crate::engine::dem::world::BondSpec;
 use crate::engine::dem::DemWorld;
@@ -764,6 +762,20 @@ impl Kind for Terzaghi {
                     "point-bond stiffness, force/length",
                 )?;
                 positive("terzaghi.bond_strength", f, "point-bond strength, force")?;
+                // The step's share on one grain of the loaded layer is about (σ_iso + σ₀) × its diameter; a
+                // bond that could break under it would turn the consolidation into a fracture test.
+                let share = (c.isotropic_stress + c.load) * 2.0 * c.radius_max;
+                if share >= f {
+                    return Err(LbdemError::field(
+                        "terzaghi.load",
+                        c.load,
+                        &format!(
+                            "with isotropic_stress gives about {share:.3e} per loaded grain, not below the bond \
+                             strength {f:.3e}: bonds could break"
+                        ),
+                        "lower the load and the packing stress, or raise terzaghi.bond_strength",
+                    ));
+                }
             }
             _ => {
                 return Err(LbdemError::field(
@@ -916,7 +928,7 @@ impl Kind for Terzaghi {
     }
 
     fn write_outputs(
-        case: &Case<Self>,
+        _case: &Case<Self>,
         state: &TerzaghiState,
         dir: &Path,
         _stage: OutputStage,
@@ -938,7 +950,6 @@ impl Kind for Terzaghi {
                 vec![r.time, d[0], d[1], theory]
             })
         });
-        let _ = case;
         let table = csv(
             &["time", "depth", "pressure_over_load", "terzaghi_over_load"],
             rows,
@@ -949,9 +960,4 @@ impl Kind for Terzaghi {
     fn results(case: &Case<Self>, state: &TerzaghiState) -> Result<serde_json::Value> {
         Ok(serde_json::to_value(outcome(case, state)).unwrap_or_default())
     }
-}
-
-/// Height of the loaded layer (for tests of the dry step).
-pub fn loaded_layer_height(state: &TerzaghiState) -> f64 {
-    loaded_height(&state.world.dem, &state.loaded)
 }
