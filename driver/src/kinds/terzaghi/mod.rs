@@ -7,6 +7,7 @@ use lbdem_kernels::dem::assembly::ContactModel;
 use lbdem_kernels::fluid::boundary::{Boundaries, SideCondition};
 use lbdem_kernels::fluid::collide::{SolidOperator, Weighting};
 use lbdem_kernels::fluid::step::FluidParams;
+use lbdem_kernels::math::{vector, Vector};
 use lbdem_reference::poroelastic::{
     biot_modulus, consolidation_coefficient, constrained_modulus, loading_efficiency,
     storage_terms, terzaghi_pressure, uniaxial_storage,
@@ -211,7 +212,7 @@ pub struct TerzaghiState {
     free_rows: usize,
     grains: usize,
     loaded: Vec<usize>,
-    after: Vec<([f64; 2], f64)>,
+    after: Vec<(Vector<f64>, f64)>,
     prediction: Prediction,
     substeps: u32,
     steps: u64,
@@ -270,8 +271,8 @@ fn start(case: &Case<Terzaghi>, exec: &Exec) -> Result<TerzaghiState> {
     // 2. Top platen off; the vertical stress through the particles of the top layer; settle (dry).
     dem.platens[top].active = false;
     let loaded = dem.boundary_particles(3, c.radius_max);
-    dem.external_force = vec![[0.0; 2]; dem.particles.len()];
-    dem.apply_boundary_stress(&loaded, [0.0, -1.0], c.isotropic_stress, c.width);
+    dem.external_force = vec![Vector::zeros(); dem.particles.len()];
+    dem.apply_boundary_stress(&loaded, vector(0.0, -1.0), c.isotropic_stress, c.width);
     let (_, settled) = settle_loaded(
         &mut dem,
         &loaded,
@@ -288,7 +289,7 @@ fn start(case: &Case<Terzaghi>, exec: &Exec) -> Result<TerzaghiState> {
             "raise the stress (σ/k_n ≳ 1e-4) or the packing size",
         ));
     }
-    let before: Vec<[f64; 2]> = dem.external_force.clone();
+    let before: Vec<Vector<f64>> = dem.external_force.clone();
     // 3. Drained constrained modulus: the same step load on a dry copy.
     // The column: bottom platen (y = 0) to the top platen the pack was made against.
     let thickness = dem.platens[top].wall.point[1];
@@ -340,14 +341,14 @@ fn start(case: &Case<Terzaghi>, exec: &Exec) -> Result<TerzaghiState> {
     for (i, f) in before.iter().enumerate() {
         world.applied[i] = (*f, 0.0);
     }
-    let after: Vec<([f64; 2], f64)> = after_forces.iter().map(|f| (*f, 0.0)).collect();
+    let after: Vec<(Vector<f64>, f64)> = after_forces.iter().map(|f| (*f, 0.0)).collect();
     // 5. The Darcy lattice: the same grains, held, with free layers below and above and Zou–He faces.
     let bodies: Vec<CoupledBody<f64>> = world
         .bodies()
         .into_iter()
         .map(|b| CoupledBody {
-            center: [b.center[0], b.center[1] + free_rows as f64],
-            velocity: [0.0; 2],
+            center: b.center + vector(0.0, free_rows as f64),
+            velocity: Vector::zeros(),
             spin: 0.0,
             ..b
         })
