@@ -139,6 +139,14 @@ check_interval = 100
             ("duration = 1.0 ", "duration = 0.4 "),
         ],
     );
+    let terzaghi = edit(
+        &bundled("terzaghi.toml"),
+        &[
+            ("height = 2.4 ", "height = 1.0 "),
+            ("duration = 10.0 ", "duration = 0.6 "),
+            ("record_interval = 0.25 ", "record_interval = 0.1 "),
+        ],
+    );
     let dry = edit(
         &bundled("uniaxial_compression.toml"),
         &[
@@ -188,6 +196,7 @@ checkpoint_interval = 50
         ("pressure_diffusion", diffusion, 200),
         ("fluid_compressibility", compressibility, 1000),
         ("consolidation", consolidation, 500),
+        ("terzaghi", terzaghi, 3000),
         ("dry", dry, 300),
         ("fracture", fracture, 40),
         ("coupled_demo", demo, 100),

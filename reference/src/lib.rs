@@ -7,3 +7,4 @@ pub mod analytic;
 pub mod coverage;
 pub mod dem;
 pub mod lbm;
+pub mod poroelastic;

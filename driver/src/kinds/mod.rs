@@ -18,6 +18,7 @@ pub mod fracture;
 pub mod porous_flow;
 pub mod pressure_diffusion;
 pub mod terminal_velocity;
+pub mod terzaghi;
 
 /// A kind's entry points, monomorphised.
 pub struct Entry {
@@ -49,6 +50,7 @@ pub const REGISTRY: &[Entry] = &[
     entry::<pressure_diffusion::PressureDiffusion>(),
     entry::<fluid_compressibility::FluidCompressibility>(),
     entry::<consolidation::Consolidation>(),
+    entry::<terzaghi::Terzaghi>(),
     entry::<dry::Dry>(),
     entry::<fracture::FractureTest>(),
     entry::<coupled_demo::CoupledDemo>(),
@@ -71,7 +73,7 @@ pub fn names() -> String {
 /// The kind whose scene files have the top-level section `section` (its own section, not one shared by several
 /// kinds), for the hint of a scene whose `[scene] kind` does not match its sections.
 pub fn owner_of_section(section: &str) -> Option<&'static str> {
-    const OWN: [(&str, &str); 8] = [
+    const OWN: [(&str, &str); 9] = [
         ("channel", "channel"),
         ("cylinder_array", "cylinder_array"),
         ("porous", "porous_flow"),
@@ -79,6 +81,7 @@ pub fn owner_of_section(section: &str) -> Option<&'static str> {
         ("pressure_diffusion", "pressure_diffusion"),
         ("fluid_compressibility", "fluid_compressibility"),
         ("consolidation", "consolidation"),
+        ("terzaghi", "terzaghi"),
         ("demo", "coupled_demo"),
     ];
     OWN.iter().find(|(s, _)| *s == section).map(|(_, k)| *k)

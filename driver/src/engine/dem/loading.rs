@@ -291,3 +291,102 @@ pub fn run_brazilian<T: Real>(
         curve,
     }
 }
+
+/// Outcome of [`uniaxial_strain_step`].
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct StepLoadResult {
+    /// Load-weighted mean vertical displacement of the loaded particles (downward positive).
+    pub settlement: f64,
+    /// Steps taken to equilibrium after the step.
+    pub steps: u64,
+    /// Whether the equilibrium criterion was met (false: the step limit was reached first).
+    pub converged: bool,
+}
+
+/// Load-weighted mean height of `loaded` (weights: bounding radii, the shares of
+/// [`DemWorld::apply_boundary_stress`]), i.e. the displacement work-conjugate to the applied stress.
+pub fn loaded_height<T: Real>(w: &DemWorld<T>, loaded: &[usize]) -> f64 {
+    let (mut s, mut ws) = (0.0, 0.0);
+    for &i in loaded {
+        let r = w.particles[i].shape.bounding_radius().to_f64_exact();
+        s += r * w.particles[i].position[1].to_f64_exact();
+        ws += r;
+    }
+    s / ws
+}
+
+/// Step `w` in blocks of `block` steps until the loaded layer stops moving: the change of
+/// [`loaded_height`] over a block below `tolerance` × `scale` (a length) and the unbalanced-force ratio below
+/// 1e-2, or `max_steps`. Returns (steps, converged).
+pub fn settle_loaded<T: Real>(
+    w: &mut DemWorld<T>,
+    loaded: &[usize],
+    block: u64,
+    scale: f64,
+    tolerance: f64,
+    max_steps: u64,
+) -> (u64, bool) {
+    let mut steps = 0;
+    let mut last = loaded_height(w, loaded);
+    while steps < max_steps {
+        for _ in 0..block {
+            w.step();
+        }
+        steps += block;
+        let now = loaded_height(w, loaded);
+        let quiet = (now - last).abs() <= tolerance * scale
+            && w.unbalanced_force_ratio().to_f64_exact() < 1e-2;
+        last = now;
+        if quiet {
+            return (steps, true);
+        }
+    }
+    (steps, false)
+}
+
+/// The drained (dry) uniaxial-strain step load: with the lateral and bottom platens fixed and a vertical
+/// stress already applied through the `loaded` particles (top platen removed) and settled, set it to
+/// `target_stress` over the loaded length `length` and settle again ([`settle_loaded`] with the given
+/// block, tolerance relative to the settlement so far and limit). The constrained modulus is then
+/// `(target − previous stress) / (settlement / height)` ([`lbdem_reference::poroelastic::constrained_modulus`]).
+pub fn uniaxial_strain_step<T: Real>(
+    w: &mut DemWorld<T>,
+    loaded: &[usize],
+    target_stress: T,
+    length: T,
+    block: u64,
+    tolerance: f64,
+    max_steps: u64,
+) -> StepLoadResult {
+    let y0 = loaded_height(w, loaded);
+    w.apply_boundary_stress(
+        loaded,
+        lbdem_kernels::math::vector(T::zero(), -T::one()),
+        target_stress,
+        length,
+    );
+    let mut steps = 0;
+    let mut converged = false;
+    let mut last = y0;
+    while steps < max_steps {
+        for _ in 0..block {
+            w.step();
+        }
+        steps += block;
+        let now = loaded_height(w, loaded);
+        let moved = y0 - now;
+        if (now - last).abs() <= tolerance * moved.abs()
+            && w.unbalanced_force_ratio().to_f64_exact() < 1e-2
+        {
+            converged = true;
+            last = now;
+            break;
+        }
+        last = now;
+    }
+    StepLoadResult {
+        settlement: y0 - last,
+        steps,
+        converged,
+    }
+}

@@ -1,0 +1,964 @@
+//! `kind = "terzaghi"`: one-dimensional consolidation of a random pack of free grains against Terzaghi's
+//! solution, with every parameter of the prediction measured independently first. See [`Terzaghi`].
+use std::path::Path;
+
+use lbdem_kernels::coupling::CoupledBody;
+use lbdem_kernels::dem::assembly::ContactModel;
+use lbdem_kernels::fluid::boundary::{Boundaries, SideCondition};
+use lbdem_kernels::fluid::collide::{SolidOperator, Weighting};
+use lbdem_kernels::fluid::step::FluidParams;
+use lbdem_kernels::math::{vector, Vector};
+use lbdem_reference::poroelastic::{
+    biot_modulus, consolidation_coefficient, constrained_modulus, loading_efficiency,
+    storage_terms, terzaghi_pressure, uniaxial_storage,
+};
+use serde::{Deserialize, Serialize};
+
+use crate::engine::coupled::{CoupledWorld, LatticeMap};
+use crate::engine::dem::loading::{settle_loaded, uniaxial_strain_step, StepLoadResult};
+use crate::engine::dem::packing::{generate_packing, hexagonal_packing, PackingSpec};
+use crate::engine::dem::world::BondSpec;
+use crate::engine::dem::DemWorld;
+use crate::engine::exec::Exec;
+use crate::engine::lattice::FluidLattice;
+use crate::error::{positive, LbdemError, Result};
+use crate::input::limits::{self, Budget};
+use crate::observe::darcy::{permeability, SteadyFlow};
+use crate::observe::fit::fit_consolidation;
+use crate::observe::flow::fluid_row_means;
+use crate::observe::health::{dem_health, finite, fluid_health};
+use crate::observe::steady::Steadiness;
+use crate::output::{csv, write_atomic};
+use crate::run::{run_in_memory, Case, CheckpointInterval, Kind, OutputStage, Persist, RunOptions};
+use crate::scene::{CheckpointSection, SceneHeader, UnitLabels, UnitsSetup};
+use crate::units::FluidSection;
+
+/// Lattice sound speed squared c_s² = 1/3.
+const CS2: f64 = 1.0 / 3.0;
+/// Lattice density difference of the steady Darcy run (small: Mach ≪ 0.1 and a linear response).
+const DARCY_DRHO: f64 = 1e-3;
+/// Relative flux change per 200 steps below which the Darcy run is steady (with Ω₁ₗ a constant drift is
+/// also accepted, [`Steadiness`]).
+const DARCY_TOLERANCE: f64 = 1e-5;
+/// DEM steps per block of the dry equilibrium checks.
+const DRY_BLOCK: u64 = 500;
+/// The loaded layer counts as settled when it moves less than this fraction of the settlement per block.
+const DRY_TOLERANCE: f64 = 1e-3;
+/// Step limit of each dry equilibrium.
+const DRY_MAX_STEPS: u64 = 400_000;
+/// Diffusion time over sound-crossing time below which the run warns that the column is not
+/// diffusion-dominated.
+pub const DIFFUSION_DOMINATED: f64 = 20.0;
+/// Start-up: records earlier than this many fluid sound-crossing times of the column are not compared.
+pub const STARTUP_CROSSINGS: f64 = 3.0;
+
+const HINT: &str = "lower terzaghi.load or raise fluid.tau";
+
+/// `[terzaghi]`
+#[derive(Clone, Debug, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct TerzaghiSection {
+    /// Packing box width (x).
+    pub width: f64,
+    /// Packing box height (y): the column, drained at its top.
+    pub height: f64,
+    /// Smallest grain radius.
+    pub radius_min: f64,
+    /// Largest grain radius.
+    pub radius_max: f64,
+    /// Packing seed.
+    pub seed: u64,
+    /// Grain density (unit thickness).
+    pub grain_density: f64,
+    /// Fraction of each radius the fluid sees.
+    pub fluid_radius: f64,
+    /// Contact normal (= shear) stiffness, force/length.
+    pub normal_stiffness: f64,
+    /// Contact friction.
+    pub friction: f64,
+    /// Isotropic stress the pack is made at (and the vertical stress before the step).
+    pub isotropic_stress: f64,
+    /// Step load σ₀ added to the vertical stress at t = 0 (stress).
+    pub load: f64,
+    /// Model time after the step.
+    pub duration: f64,
+    /// Time between pore-pressure profile records.
+    pub record_interval: f64,
+    /// Free fluid above the pack (the drained boundary), length; default 2 `radius_max`.
+    #[serde(default)]
+    pub free_layer: Option<f64>,
+    /// b/a of the grains (1: discs; below 1: ellipses of random orientation, as in the fracture test).
+    #[serde(default)]
+    pub aspect_ratio: Option<f64>,
+    /// Point-bond stiffness k_b (force/length; eq. 6.13): bond every touching pair after packing (with
+    /// `bond_strength`); absent: unbonded.
+    #[serde(default)]
+    pub bond_stiffness: Option<f64>,
+    /// Point-bond strength F_crit (force).
+    #[serde(default)]
+    pub bond_strength: Option<f64>,
+    /// Which porosity multiplies β_f in the storage S: false (default), the geometric n = 1 − ⟨ε⟩; true, the
+    /// storage porosity of the lattice measured in the Darcy run ([`Prediction::storage_porosity`]): in the
+    /// partially-saturated method every node, covered or not, holds a full node of fluid whose density
+    /// follows the pore pressure (covered nodes with a lag), so the lattice stores more than n β_f.
+    #[serde(default)]
+    pub storage_porosity_measured: bool,
+}
+
+/// A Terzaghi scene file.
+#[derive(Clone, Debug, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct TerzaghiScene {
+    /// `[scene]`
+    pub scene: SceneHeader,
+    /// `[fluid]`
+    pub fluid: FluidSection,
+    /// `[terzaghi]`
+    pub terzaghi: TerzaghiSection,
+    /// `[run]`
+    #[serde(default)]
+    pub run: CheckpointSection,
+}
+
+/// The independent measurements and the prediction they give (physical units).
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct Prediction {
+    /// Column thickness L (bottom wall to the top of the pack).
+    pub thickness: f64,
+    /// Drained constrained modulus K_v from the dry step load.
+    pub drained_modulus: f64,
+    /// Vertical strain of the dry step.
+    pub dry_strain: f64,
+    /// DEM steps of the dry step to equilibrium, and whether it converged.
+    pub dry_steps: u64,
+    /// Whether the dry step met its equilibrium criterion.
+    pub dry_converged: bool,
+    /// Porosity the fluid sees, 1 − ⟨ε⟩ over the column.
+    pub porosity: f64,
+    /// Storage porosity of the lattice: the fraction of the column's nodes whose fluid stores at the pore
+    /// pressure, measured at the steady state of the Darcy run (grains held; see
+    /// [`TerzaghiSection::storage_porosity_measured`]).
+    pub storage_porosity: f64,
+    /// Permeability along the column by steady Darcy flow, grains fixed.
+    pub permeability: f64,
+    /// Steps of the Darcy run.
+    pub darcy_steps: u64,
+    /// Fluid compressibility 1/(ρ₀c_s²).
+    pub fluid_compressibility: f64,
+    /// Storage terms: n β_f and 1/K_v, and their sum S.
+    pub storage_fluid: f64,
+    /// 1/K_v.
+    pub storage_skeleton: f64,
+    /// S = n β_f + 1/K_v.
+    pub storage: f64,
+    /// Loading efficiency γ = 1/(K_v S).
+    pub loading_efficiency: f64,
+    /// Consolidation coefficient c_v = k/(μ S).
+    pub consolidation_coefficient: f64,
+    /// Fluid sound-crossing time of the column L/c_s.
+    pub sound_crossing_time: f64,
+    /// Diffusion time L²/c_v.
+    pub diffusion_time: f64,
+}
+
+/// One pore-pressure profile: time since the step and (depth below the top, p/σ₀) per lattice row.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct Profile {
+    /// Time since the step.
+    pub time: f64,
+    /// (depth, p/σ₀).
+    pub rows: Vec<[f64; 2]>,
+    /// Σ over the column's nodes of the excess density / Σ over its rows of (nodes × the fluid-only excess):
+    /// the fraction of the lattice that stores fluid at the pore pressure (diagnostic of the storage term).
+    pub stored_fraction: f64,
+}
+
+/// What the comparison with Terzaghi's solution gives.
+#[derive(Clone, Debug, Serialize)]
+pub struct Comparison {
+    /// Records compared (after the start-up).
+    pub records: usize,
+    /// Samples compared.
+    pub samples: usize,
+    /// RMS of measured − predicted p over γσ₀, after the start-up.
+    pub rms_over_gamma_load: f64,
+    /// Consolidation coefficient fitted freely to the same samples (p/(γσ₀) with the predicted γ).
+    pub fitted_coefficient: f64,
+    /// Fitted over predicted c_v.
+    pub fitted_over_predicted: f64,
+    /// RMS residual of the fit over γσ₀.
+    pub fit_rms: f64,
+    /// Largest mean p/σ₀ over the bottom grain diameter (the undrained plateau before drainage reaches the
+    /// base; Terzaghi: γ).
+    pub bottom_peak_over_load: f64,
+    /// Time of that peak.
+    pub bottom_peak_time: f64,
+    /// Stored fraction ([`Profile::stored_fraction`]) at the first record after the start-up and at the last
+    /// record whose mean pressure is still above γσ₀/10, against the porosity n = 1 − ⟨ε⟩ the prediction uses.
+    pub stored_fraction_early: f64,
+    /// At the last record.
+    pub stored_fraction_late: f64,
+}
+
+/// The run state.
+#[derive(Serialize, Deserialize)]
+pub struct TerzaghiState {
+    world: CoupledWorld,
+    darcy: Option<FluidLattice<f64>>,
+    flow: SteadyFlow,
+    nx: usize,
+    ny: usize,
+    pack_rows: usize,
+    free_rows: usize,
+    grains: usize,
+    loaded: Vec<usize>,
+    after: Vec<(Vector<f64>, f64)>,
+    prediction: Prediction,
+    substeps: u32,
+    steps: u64,
+    record_every: u64,
+    s: u64,
+    profiles: Vec<Profile>,
+}
+
+impl Persist for TerzaghiState {}
+
+fn contact(c: &TerzaghiSection) -> ContactModel<f64> {
+    ContactModel {
+        normal_stiffness: c.normal_stiffness,
+        shear_stiffness: c.normal_stiffness,
+        friction: c.friction,
+        restitution: 1.0,
+        no_tension: true,
+    }
+}
+
+/// DEM critical step of the smallest grain with six contacts (a 2 × 2 hexagonal probe of `radius_min` and the
+/// scene's aspect ratio).
+fn critical_step(c: &TerzaghiSection) -> Result<f64> {
+    let aspect = c.aspect_ratio.unwrap_or(1.0);
+    let probe = hexagonal_packing(2, 2, c.radius_min, aspect, 0.0, c.grain_density, c.seed);
+    Ok(DemWorld::new(probe, contact(c), 1e-300)?.critical_time_step())
+}
+
+fn start(case: &Case<Terzaghi>, exec: &Exec) -> Result<TerzaghiState> {
+    let c = &case.scene.terzaghi;
+    let u = &case.setup.units;
+    let h = u.spacing;
+    let critical = critical_step(c)?;
+    // 1. The random pack (the dissertation's procedure) at the isotropic stress.
+    let mut spec =
+        PackingSpec::dissertation(c.width, c.height, c.aspect_ratio.unwrap_or(1.0), c.seed);
+    spec.radius_min = c.radius_min;
+    spec.radius_max = c.radius_max;
+    spec.density = c.grain_density;
+    spec.contact = contact(c);
+    spec.isotropic_stress = c.isotropic_stress;
+    spec.timestep = 0.5 * critical;
+    let bonds = match (c.bond_stiffness, c.bond_strength) {
+        (Some(stiffness), Some(strength)) => Some(BondSpec::Point {
+            stiffness,
+            strength,
+        }),
+        _ => None,
+    };
+    let pk = generate_packing(&spec, bonds)?;
+    let mut dem = pk.world;
+    // Bonds stiffen the grains' springs: the step follows the bonded world's critical step.
+    let critical = critical.min(dem.critical_time_step());
+    dem.set_timestep(0.5 * critical)?;
+    let top = pk.sample_box.top;
+    // 2. Top platen off; the vertical stress through the particles of the top layer; settle (dry).
+    dem.platens[top].active = false;
+    let loaded = dem.boundary_particles(3, c.radius_max);
+    dem.external_force = vec![Vector::zeros(); dem.particles.len()];
+    dem.apply_boundary_stress(&loaded, vector(0.0, -1.0), c.isotropic_stress, c.width);
+    let (_, settled) = settle_loaded(
+        &mut dem,
+        &loaded,
+        DRY_BLOCK,
+        c.radius_min,
+        1e-4,
+        DRY_MAX_STEPS,
+    );
+    if !settled {
+        return Err(LbdemError::field(
+            "terzaghi.isotropic_stress",
+            c.isotropic_stress,
+            "the pack did not settle under it with the top platen removed",
+            "raise the stress (σ/k_n ≳ 1e-4) or the packing size",
+        ));
+    }
+    let before: Vec<Vector<f64>> = dem.external_force.clone();
+    // 3. Drained constrained modulus: the same step load on a dry copy.
+    // The column: bottom platen (y = 0) to the top platen the pack was made against.
+    let thickness = dem.platens[top].wall.point[1];
+    let mut dry = dem.clone();
+    let step: StepLoadResult = uniaxial_strain_step(
+        &mut dry,
+        &loaded,
+        c.isotropic_stress + c.load,
+        c.width,
+        DRY_BLOCK,
+        DRY_TOLERANCE,
+        DRY_MAX_STEPS,
+    );
+    let after_forces = dry.external_force.clone();
+    let dry_strain = step.settlement / thickness;
+    let drained_modulus = constrained_modulus(c.load, dry_strain);
+    // 4. The coupled lattice: walls W/E/S on the platens, Zou–He P = 0 at the top of a free layer.
+    let nx = (c.width / h).round() as usize;
+    let pack_rows = (thickness / h).round() as usize;
+    let free_rows = ((c.free_layer.unwrap_or(2.0 * c.radius_max) / h).round() as usize).max(2);
+    let ny = pack_rows + free_rows;
+    let params = FluidParams {
+        tau: u.tau,
+        force: [0.0; 2],
+    };
+    let mut fluid = FluidLattice::<f64>::new(
+        nx,
+        ny,
+        Boundaries {
+            west: SideCondition::Wall,
+            east: SideCondition::Wall,
+            south: SideCondition::Wall,
+            north: SideCondition::Pressure { density: 1.0 },
+        },
+        params,
+    )?;
+    exec.apply(&mut fluid);
+    fluid.set_solid_operator(SolidOperator::LinearizedNonEquilibriumBounceBack);
+    let substeps = (u.timestep / (0.5 * critical)).ceil().max(1.0) as u32;
+    let map = LatticeMap::of(u, [0.5 * h, 0.5 * h]);
+    let mut world = CoupledWorld::new(
+        fluid,
+        dem,
+        map,
+        c.fluid_radius,
+        Weighting::NobleTorczynski,
+        substeps,
+    )?;
+    for (i, f) in before.iter().enumerate() {
+        world.applied[i] = (*f, 0.0);
+    }
+    let after: Vec<(Vector<f64>, f64)> = after_forces.iter().map(|f| (*f, 0.0)).collect();
+    // 5. The Darcy lattice: the same grains, held, with free layers below and above and Zou–He faces.
+    let bodies: Vec<CoupledBody<f64>> = world
+        .bodies()
+        .into_iter()
+        .map(|b| CoupledBody {
+            center: b.center + vector(0.0, free_rows as f64),
+            velocity: Vector::zeros(),
+            spin: 0.0,
+            ..b
+        })
+        .collect();
+    let ny_d = pack_rows + 2 * free_rows;
+    let mut darcy = FluidLattice::<f64>::new(
+        nx,
+        ny_d,
+        Boundaries {
+            west: SideCondition::Wall,
+            east: SideCondition::Wall,
+            south: SideCondition::Pressure {
+                density: 1.0 + DARCY_DRHO,
+            },
+            north: SideCondition::Pressure { density: 1.0 },
+        },
+        params,
+    )?;
+    exec.apply(&mut darcy);
+    darcy.set_solid_operator(SolidOperator::LinearizedNonEquilibriumBounceBack);
+    darcy.cover_with_bodies(&bodies, Weighting::NobleTorczynski);
+    // Fluid-only nodes start on the linear profile, covered ones at ρ₀: the storage fraction measured at the
+    // steady state is then what the covered nodes took up during the run, not an initial condition.
+    let eps_d = darcy.solid_fraction_map();
+    darcy.fill_equilibrium(|x, y| {
+        let f = (y as f64 / (ny_d - 1) as f64).clamp(0.0, 1.0);
+        if eps_d[y * nx + x] == 0.0 {
+            (1.0 + DARCY_DRHO * (1.0 - f), [0.0; 2])
+        } else {
+            (1.0, [0.0; 2])
+        }
+    });
+    // Porosity the fluid sees over the column (the coupled lattice's coverage at t = 0).
+    world
+        .fluid
+        .cover_with_bodies(&world.bodies(), world.weighting);
+    let eps = world.fluid.solid_fraction_map();
+    let porosity = 1.0 - eps[..pack_rows * nx].iter().sum::<f64>() / (pack_rows * nx) as f64;
+    let steps = u.time_to_steps(c.duration).round().max(10.0) as u64;
+    let record_every = (u.time_to_steps(c.record_interval).round() as u64).max(1);
+    let prediction = Prediction {
+        thickness,
+        drained_modulus,
+        dry_strain,
+        dry_steps: step.steps,
+        dry_converged: step.converged,
+        porosity,
+        storage_porosity: f64::NAN,
+        permeability: f64::NAN,
+        darcy_steps: 0,
+        fluid_compressibility: u.compressibility,
+        storage_fluid: f64::NAN,
+        storage_skeleton: f64::NAN,
+        storage: f64::NAN,
+        loading_efficiency: f64::NAN,
+        consolidation_coefficient: f64::NAN,
+        sound_crossing_time: thickness / u.sound_speed,
+        diffusion_time: f64::NAN,
+    };
+    let grains = world.dem.particles.len();
+    Ok(TerzaghiState {
+        world,
+        darcy: Some(darcy),
+        flow: SteadyFlow::new(Steadiness::new(DARCY_TOLERANCE, true), 200, 400_000),
+        nx,
+        ny,
+        pack_rows,
+        free_rows,
+        grains,
+        loaded,
+        after,
+        prediction,
+        substeps,
+        steps,
+        record_every,
+        s: 0,
+        profiles: Vec::new(),
+    })
+}
+
+impl TerzaghiState {
+    fn advance(&mut self, case: &Case<Terzaghi>) -> Result<()> {
+        let u = &case.setup.units;
+        let c = &case.scene.terzaghi;
+        let nx = self.nx;
+        if let Some(darcy) = &mut self.darcy {
+            let (fr, pr) = (self.free_rows, self.pack_rows);
+            let ny_d = pr + 2 * fr;
+            let row = fr / 2;
+            let flux = move |f: &FluidLattice<f64>| -> f64 {
+                let (rho, vel) = f.moments();
+                (0..nx)
+                    .map(|x| rho[row * nx + x] * vel[row * nx + x][1])
+                    .sum::<f64>()
+                    / nx as f64
+            };
+            if !self.flow.advance(darcy, flux, HINT)? {
+                return Ok(());
+            }
+            let (rho, _) = darcy.moments();
+            let mean = |y: usize| (0..nx).map(|x| rho[y * nx + x]).sum::<f64>() / nx as f64;
+            let drop = CS2 * (mean(row) - mean(ny_d - 1 - row));
+            // The storage porosity of the lattice at the steady state: excess density of every node of the
+            // column over that of its fluid-only nodes, row by row (see `Profile::stored_fraction`).
+            let eps = darcy.solid_fraction_map();
+            let rows = fluid_row_means(&rho, &eps, nx, fr..fr + pr);
+            let (mut all, mut pore) = (0.0, 0.0);
+            for &(y, m, _) in &rows {
+                all += rho[y * nx..(y + 1) * nx]
+                    .iter()
+                    .map(|r| r - 1.0)
+                    .sum::<f64>();
+                pore += nx as f64 * (m - 1.0);
+            }
+            let storage_porosity = all / pore;
+            let k = permeability(u.lattice_viscosity, self.flow.flux, pr as f64, drop);
+            let p = &mut self.prediction;
+            p.permeability = u.permeability_to_physical(k);
+            p.darcy_steps = self.flow.steps;
+            p.storage_porosity = storage_porosity;
+            let n = if c.storage_porosity_measured {
+                storage_porosity
+            } else {
+                p.porosity
+            };
+            let (sf, ss) = storage_terms(n, p.fluid_compressibility, p.drained_modulus);
+            let m = biot_modulus(n, p.fluid_compressibility, 0.0, 1.0);
+            p.storage_fluid = sf;
+            p.storage_skeleton = ss;
+            p.storage = uniaxial_storage(m, 1.0, p.drained_modulus);
+            p.loading_efficiency = loading_efficiency(m, 1.0, p.drained_modulus);
+            p.consolidation_coefficient =
+                consolidation_coefficient(p.permeability, u.density * u.viscosity, p.storage);
+            p.diffusion_time = p.thickness * p.thickness / p.consolidation_coefficient;
+            // Terzaghi's diffusion describes the column only when sound crosses it much faster than pressure
+            // diffuses (the model: the fracture kind's warning).
+            let regime = p.diffusion_time / p.sound_crossing_time;
+            if regime < DIFFUSION_DOMINATED {
+                eprintln!(
+                    "lbdem: WARNING: terzaghi: the column is not diffusion-dominated (diffusion time L^2/c_v / sound \
+                     crossing time L/c_s = {regime:.1} < {DIFFUSION_DOMINATED}): the start-up overlaps the \
+                     dissipation and the comparison is only indicative; lengthen terzaghi.height, or shorten \
+                     fluid.timestep (faster sound)"
+                );
+            }
+            eprintln!(
+                "lbdem: terzaghi: K_v = {:.4e}, k = {:.4e}, n = {:.4}, storage porosity {:.4}: S = {:.4e} (fluid \
+                 {:.4e}, skeleton {:.4e}), gamma = {:.4}, c_v = {:.4e}",
+                p.drained_modulus,
+                p.permeability,
+                p.porosity,
+                p.storage_porosity,
+                p.storage,
+                p.storage_fluid,
+                p.storage_skeleton,
+                p.loading_efficiency,
+                p.consolidation_coefficient
+            );
+            self.darcy = None;
+            // The step load.
+            for &i in &self.loaded {
+                self.world.applied[i] = self.after[i];
+            }
+            return Ok(());
+        }
+        let end = ((self.s / 500 + 1) * 500).min(self.steps);
+        let load = c.load;
+        for s in self.s + 1..=end {
+            self.world.step();
+            if s.is_multiple_of(self.record_every) {
+                let eps = self.world.fluid.solid_fraction_map();
+                let (rho, _) = self.world.fluid.moments();
+                let rows = fluid_row_means(&rho, &eps, nx, 0..self.pack_rows);
+                let mut out = Vec::with_capacity(rows.len());
+                // Stored fraction: the excess density of every node of the rows over that of their
+                // fluid-only nodes (1: every node stores at the pore pressure; the fluid-only fraction: only
+                // those do).
+                let (mut all, mut pore) = (0.0, 0.0);
+                for &(y, mean, _) in &rows {
+                    all += rho[y * nx..(y + 1) * nx]
+                        .iter()
+                        .map(|r| r - 1.0)
+                        .sum::<f64>();
+                    pore += nx as f64 * (mean - 1.0);
+                }
+                for (y, mean, _) in rows {
+                    let p = u.pressure_to_physical(CS2 * (mean - 1.0)) / load;
+                    let depth = self.prediction.thickness - (y as f64 + 0.5) * u.spacing;
+                    out.push([depth, finite("pore pressure", p, s, HINT)?]);
+                }
+                self.profiles.push(Profile {
+                    time: s as f64 * u.timestep,
+                    rows: out,
+                    stored_fraction: all / pore,
+                });
+            }
+        }
+        self.s = end;
+        Ok(())
+    }
+
+    /// The comparison of the profiles after the start-up with Terzaghi's solution (γ and c_v predicted).
+    pub fn comparison(&self, radius_max: f64) -> Comparison {
+        let p = &self.prediction;
+        let (gamma, cv, l) = (
+            p.loading_efficiency,
+            p.consolidation_coefficient,
+            p.thickness,
+        );
+        let t0 = STARTUP_CROSSINGS * p.sound_crossing_time;
+        let mut samples = Vec::new();
+        let mut sq = 0.0;
+        let mut records = 0;
+        let mut bottom = (f64::NEG_INFINITY, f64::NAN);
+        for r in &self.profiles {
+            let base: Vec<f64> = r
+                .rows
+                .iter()
+                .filter(|d| d[0] >= l - 2.0 * radius_max)
+                .map(|d| d[1])
+                .collect();
+            if !base.is_empty() {
+                let m = base.iter().sum::<f64>() / base.len() as f64;
+                if m > bottom.0 {
+                    bottom = (m, r.time);
+                }
+            }
+            if r.time <= t0 {
+                continue;
+            }
+            records += 1;
+            for d in &r.rows {
+                let theory = gamma * terzaghi_pressure(d[0].max(0.0), r.time, cv, l);
+                sq += (d[1] - theory).powi(2);
+                samples.push((d[0].max(0.0), r.time, d[1] / gamma));
+            }
+        }
+        let n = samples.len();
+        let rms = (sq / n.max(1) as f64).sqrt() / gamma;
+        let (fit, fit_rms, _) = if n > 0 {
+            fit_consolidation(&samples, l, cv)
+        } else {
+            (f64::NAN, f64::NAN, 0)
+        };
+        let first = self.profiles.iter().find(|r| r.time > t0);
+        Comparison {
+            stored_fraction_early: first.map_or(f64::NAN, |r| r.stored_fraction),
+            // The last record still holding a tenth of γσ₀ on average (later, the ratio of two vanishing
+            // excesses means nothing).
+            stored_fraction_late: self
+                .profiles
+                .iter()
+                .rfind(|r| {
+                    let m = r.rows.iter().map(|d| d[1]).sum::<f64>() / r.rows.len().max(1) as f64;
+                    m > 0.1 * gamma
+                })
+                .map_or(f64::NAN, |r| r.stored_fraction),
+            records,
+            samples: n,
+            rms_over_gamma_load: rms,
+            fitted_coefficient: fit,
+            fitted_over_predicted: fit / cv,
+            fit_rms,
+            bottom_peak_over_load: bottom.0,
+            bottom_peak_time: bottom.1,
+        }
+    }
+}
+
+/// Outcome of a Terzaghi run.
+#[derive(Clone, Debug, Serialize)]
+pub struct TerzaghiOutcome {
+    /// Grains.
+    pub grains: usize,
+    /// Lattice of the consolidation.
+    pub nodes: [usize; 2],
+    /// DEM sub-steps per fluid step.
+    pub substeps: u32,
+    /// The independent measurements and the prediction.
+    pub prediction: Prediction,
+    /// The comparison.
+    pub comparison: Comparison,
+}
+
+/// Run a Terzaghi case in memory to its end; also returns the profiles.
+pub fn simulate(case: &Case<Terzaghi>) -> Result<(TerzaghiOutcome, Vec<Profile>)> {
+    let (state, _) = run_in_memory(case, &RunOptions::default())?;
+    Ok((outcome(case, &state), state.profiles.clone()))
+}
+
+fn outcome(case: &Case<Terzaghi>, state: &TerzaghiState) -> TerzaghiOutcome {
+    TerzaghiOutcome {
+        grains: state.grains,
+        nodes: [state.nx, state.ny],
+        substeps: state.substeps,
+        prediction: state.prediction.clone(),
+        comparison: state.comparison(case.scene.terzaghi.radius_max),
+    }
+}
+
+/// The Terzaghi kind: one-dimensional consolidation of a **random** pack of free, unbonded grains (the
+/// dissertation's packing procedure at `isotropic_stress`) in a box of fixed DEM platens, the top platen
+/// replaced by the vertical stress applied through the particles of the top layer (so the fluid drains
+/// freely upward), fluid walls west/east/south and a free fluid layer at Zou–He P = 0 above the pack; solid
+/// operator Ω₁ₗ. Before the step, the run measures independently (all with the grains of the run):
+/// 1. the **drained constrained modulus** K_v: a dry copy of the settled pack takes the same step σ₀ through
+///    the same particles; K_v = σ₀/(settlement/L) (uniaxial strain: the lateral and bottom platens are fixed);
+/// 2. the **permeability** k along the column: steady Darcy flow through the same grains held fixed, on a
+///    lattice with free layers below and above and Zou–He faces ([`crate::observe::darcy`]);
+/// 3. the **porosity** the fluid sees, n = 1 − ⟨ε⟩ over the column, and the LB fluid's compressibility
+///    β_f = 1/(ρ₀c_s²);
+///
+/// then predicts γ = 1/(K_v S) and c_v = k/(μ S) with S = n β_f + 1/K_v (incompressible grains:
+/// [`lbdem_reference::poroelastic`]). At t = 0 the vertical stress rises by σ₀; the row means of the
+/// fluid-only pore pressure are recorded every `record_interval` and compared, after
+/// [`STARTUP_CROSSINGS`] sound-crossing times, with γσ₀ × Terzaghi's series (no parameter fitted), and c is
+/// also fitted freely ([`crate::observe::fit::fit_consolidation`]).
+pub struct Terzaghi;
+
+impl Kind for Terzaghi {
+    const NAME: &'static str = "terzaghi";
+    const NOT_MEASURED: &'static [&'static str] = &[
+        "stored_fraction_early",
+        "stored_fraction_late",
+        "bottom_peak_time",
+        "fitted_coefficient",
+        "fitted_over_predicted",
+        "fit_rms",
+    ];
+    type Scene = TerzaghiScene;
+    type Setup = UnitsSetup;
+    type State = TerzaghiState;
+
+    fn validate(scene: &TerzaghiScene) -> Result<()> {
+        scene.scene.require_f64()?;
+        let u = scene.fluid.lattice_units()?;
+        let c = &scene.terzaghi;
+        for (field, v, hint) in [
+            ("terzaghi.width", c.width, "packing box width"),
+            ("terzaghi.height", c.height, "column height"),
+            ("terzaghi.radius_min", c.radius_min, "smallest grain radius"),
+            ("terzaghi.radius_max", c.radius_max, "largest grain radius"),
+            ("terzaghi.grain_density", c.grain_density, "e.g. 2.65"),
+            (
+                "terzaghi.normal_stiffness",
+                c.normal_stiffness,
+                "contact stiffness, force/length",
+            ),
+            (
+                "terzaghi.isotropic_stress",
+                c.isotropic_stress,
+                "packing stress",
+            ),
+            ("terzaghi.load", c.load, "the step load"),
+            ("terzaghi.duration", c.duration, "model time"),
+            (
+                "terzaghi.record_interval",
+                c.record_interval,
+                "time between profiles",
+            ),
+        ] {
+            positive(field, v, hint)?;
+        }
+        if c.radius_min > c.radius_max {
+            return Err(LbdemError::field(
+                "terzaghi.radius_min",
+                c.radius_min,
+                "exceeds terzaghi.radius_max",
+                "swap them",
+            ));
+        }
+        if c.height < 8.0 * c.radius_max || c.width < 8.0 * c.radius_max {
+            return Err(LbdemError::field(
+                "terzaghi.height",
+                format!("{} x {}", c.width, c.height),
+                "the column is shorter or narrower than four grain diameters: no continuum profile to compare",
+                "make width and height at least 8 radius_max",
+            ));
+        }
+        if !(c.fluid_radius > 0.0 && c.fluid_radius <= 1.0) {
+            return Err(LbdemError::field(
+                "terzaghi.fluid_radius",
+                c.fluid_radius,
+                "must lie in (0, 1]",
+                "0.8 keeps the 2-D pore space connected",
+            ));
+        }
+        if !(c.friction >= 0.0 && c.friction.is_finite()) {
+            return Err(LbdemError::field(
+                "terzaghi.friction",
+                c.friction,
+                "must be >= 0",
+                "e.g. 0.5",
+            ));
+        }
+        if let Some(a) = c.aspect_ratio {
+            if !(a > 0.0 && a <= 1.0) {
+                return Err(LbdemError::field(
+                    "terzaghi.aspect_ratio",
+                    a,
+                    "must lie in (0, 1]",
+                    "1 for discs, 0.5 for the fracture test's ellipses",
+                ));
+            }
+        }
+        match (c.bond_stiffness, c.bond_strength) {
+            (None, None) => {}
+            (Some(k), Some(f)) => {
+                positive(
+                    "terzaghi.bond_stiffness",
+                    k,
+                    "point-bond stiffness, force/length",
+                )?;
+                positive("terzaghi.bond_strength", f, "point-bond strength, force")?;
+                // The step's share on one grain of the loaded layer is about (σ_iso + σ₀) × its diameter; a
+                // bond that could break under it would turn the consolidation into a fracture test.
+                let share = (c.isotropic_stress + c.load) * 2.0 * c.radius_max;
+                if share >= f {
+                    return Err(LbdemError::field(
+                        "terzaghi.load",
+                        c.load,
+                        &format!(
+                            "with isotropic_stress gives about {share:.3e} per loaded grain, not below the bond \
+                             strength {f:.3e}: bonds could break"
+                        ),
+                        "lower the load and the packing stress, or raise terzaghi.bond_strength",
+                    ));
+                }
+            }
+            _ => {
+                return Err(LbdemError::field(
+                    "terzaghi.bond_stiffness",
+                    format!("{:?} / {:?}", c.bond_stiffness, c.bond_strength),
+                    "bond_stiffness and bond_strength go together",
+                    "give both (bonded pack) or neither (unbonded)",
+                ))
+            }
+        }
+        if let Some(f) = c.free_layer {
+            positive("terzaghi.free_layer", f, "free fluid above the pack")?;
+        }
+        let drho = u.pressure_to_density_change(c.load);
+        if drho > 0.01 {
+            return Err(LbdemError::field(
+                "terzaghi.load",
+                c.load,
+                &format!(
+                    "gives a lattice density change {drho:.3e} > 1e-2 if the fluid carries it"
+                ),
+                "lower the load, or shorten fluid.timestep",
+            ));
+        }
+        if c.load > c.isotropic_stress {
+            return Err(LbdemError::field(
+                "terzaghi.load",
+                c.load,
+                "exceeds terzaghi.isotropic_stress: the step would rearrange the pack, not strain it elastically",
+                "keep the step a fraction of the packing stress",
+            ));
+        }
+        if u.length_to_lattice(c.radius_min) * c.fluid_radius < 2.0 {
+            return Err(LbdemError::field(
+                "terzaghi.radius_min",
+                c.radius_min,
+                "is seen by the fluid as fewer than 2 lattice spacings",
+                "refine fluid.spacing",
+            ));
+        }
+        Ok(())
+    }
+
+    fn budget(scene: &TerzaghiScene, setup: &UnitsSetup) -> Result<Budget> {
+        let c = &scene.terzaghi;
+        let u = &setup.units;
+        let grains = limits::count(
+            "terzaghi.radius_min",
+            "the grain count",
+            (c.width * c.height / (std::f64::consts::PI * c.radius_min * c.radius_min)).ceil(),
+        )?;
+        let grains = limits::grains("terzaghi.radius_min", grains)?;
+        let steps = limits::steps_for("terzaghi.duration", c.duration, u.timestep, false)?;
+        let critical = critical_step(c)?;
+        let substeps =
+            limits::substeps("terzaghi.normal_stiffness", u.timestep / (0.5 * critical))?;
+        limits::steps(
+            "terzaghi.normal_stiffness",
+            limits::mul("terzaghi.duration", "the DEM step count", steps, substeps)?,
+        )?;
+        let nx = limits::count(
+            "terzaghi.width",
+            "the lattice width",
+            (c.width / u.spacing).ceil(),
+        )?;
+        let free = c.free_layer.unwrap_or(2.0 * c.radius_max);
+        let ny = limits::count(
+            "terzaghi.height",
+            "the lattice height",
+            ((c.height + 2.0 * free) / u.spacing).ceil() + 2.0,
+        )?;
+        let mut b = Budget::new();
+        b.note(format!(
+            "DEM critical step {critical:.4e}: {substeps} DEM sub-step(s) per fluid step"
+        ));
+        // Two lattices: the Darcy run's and the consolidation's.
+        limits::lattice(&mut b, "terzaghi.width", "lattices", nx, 2 * ny, 8, true)?;
+        b.add_items("grains", "terzaghi.width", grains, limits::GRAIN_BYTES)?;
+        Ok(b)
+    }
+
+    fn setup(scene: &TerzaghiScene) -> Result<UnitsSetup> {
+        UnitsSetup::new(&scene.fluid)
+    }
+
+    fn describe(case: &Case<Self>) -> String {
+        let labels = case.scene.scene.units.labels();
+        let c = &case.scene.terzaghi;
+        let u = &case.setup.units;
+        case.setup.describe(labels)
+            + &format!(
+                "  column {:.1} x {:.1} nodes, grain radii {:.2}-{:.2} nodes; load {:.4e} = lattice density {:.3e}; \
+                 sound-crossing time of the column {:.4e} s ({:.0} steps); {} steps\n  \
+                 K_v, k and n are measured at the start of the run; gamma and c_v follow (summary.json)\n",
+                c.width / u.spacing,
+                c.height / u.spacing,
+                c.radius_min / u.spacing,
+                c.radius_max / u.spacing,
+                c.load,
+                u.pressure_to_density_change(c.load),
+                c.height / u.sound_speed,
+                c.height / u.sound_speed / u.timestep,
+                u.time_to_steps(c.duration).round()
+            )
+    }
+
+    fn warnings(case: &Case<Self>) -> Vec<String> {
+        case.setup.warnings.clone()
+    }
+
+    fn units(scene: &TerzaghiScene) -> UnitLabels {
+        scene.scene.units.labels()
+    }
+
+    fn checkpoint_interval(scene: &TerzaghiScene) -> CheckpointInterval {
+        scene.run.checkpoint_interval
+    }
+
+    fn start(case: &Case<Self>, exec: &Exec) -> Result<TerzaghiState> {
+        start(case, exec)
+    }
+
+    fn resume(_case: &Case<Self>, state: &mut TerzaghiState, exec: &Exec) -> Result<()> {
+        exec.apply(&mut state.world.fluid);
+        if let Some(d) = &mut state.darcy {
+            exec.apply(d);
+        }
+        Ok(())
+    }
+
+    fn steps_done(state: &TerzaghiState) -> u64 {
+        state.s + state.flow.steps
+    }
+
+    fn total_steps(_case: &Case<Self>, state: &TerzaghiState) -> Option<u64> {
+        Some(state.steps + state.flow.steps)
+    }
+
+    fn finished(_case: &Case<Self>, state: &TerzaghiState) -> bool {
+        state.darcy.is_none() && state.s >= state.steps
+    }
+
+    fn advance(case: &Case<Self>, state: &mut TerzaghiState, _dir: Option<&Path>) -> Result<()> {
+        state.advance(case)
+    }
+
+    fn health(_case: &Case<Self>, state: &TerzaghiState) -> Result<()> {
+        fluid_health(&state.world.fluid, HINT)?;
+        dem_health(&state.world.dem)
+    }
+
+    fn write_outputs(
+        _case: &Case<Self>,
+        state: &TerzaghiState,
+        dir: &Path,
+        _stage: OutputStage,
+    ) -> Result<()> {
+        let p = &state.prediction;
+        let rows = state.profiles.iter().flat_map(|r| {
+            r.rows.iter().map(move |d| {
+                let theory = if p.consolidation_coefficient.is_finite() {
+                    p.loading_efficiency
+                        * terzaghi_pressure(
+                            d[0].max(0.0),
+                            r.time,
+                            p.consolidation_coefficient,
+                            p.thickness,
+                        )
+                } else {
+                    f64::NAN
+                };
+                vec![r.time, d[0], d[1], theory]
+            })
+        });
+        let table = csv(
+            &["time", "depth", "pressure_over_load", "terzaghi_over_load"],
+            rows,
+        );
+        write_atomic(&dir.join("profiles.csv"), table.as_bytes())
+    }
+
+    fn results(case: &Case<Self>, state: &TerzaghiState) -> Result<serde_json::Value> {
+        Ok(serde_json::to_value(outcome(case, state)).unwrap_or_default())
+    }
+}
