@@ -229,3 +229,76 @@ pub(crate) fn whole_spacings(field: &str, length: f64, h: f64) -> Result<usize> 
 }
 
 pub use crate::input::parse::{kind_field, parse_scene, peek_kind, read_scene_text, KindField};
+
+/// Grain-to-fluid density ratio at or below which ΩΛ with free grains is refused at τ ≥
+/// [`LIGHT_GRAIN_TAU_REFUSE`] (measured: a free disc of radius 10 nodes with ρs/ρf = 1 and 1.25 diverges at
+/// τ = 1.2 and 2; README, "Moving solids, every operator").
+pub const LIGHT_GRAIN_RATIO: f64 = 1.25;
+/// Relaxation time from which ΩΛ with grains no denser than [`LIGHT_GRAIN_RATIO`] × the fluid is refused.
+pub const LIGHT_GRAIN_TAU_REFUSE: f64 = 1.0;
+/// Grain-to-fluid density ratio below which ΩΛ with free grains is warned about above τ = 0.8 (the edge of the
+/// measured stable region: ρs/ρf = 1.5 stable up to τ = 2).
+pub const LIGHT_GRAIN_RATIO_WARN: f64 = 1.5;
+
+/// Check the PSM solid operator `op` (read from `field`) of a scene whose grains move freely under the fluid's
+/// force, at relaxation time `tau`, for grains `density_ratio` times as dense as the fluid (the lightest grain).
+///
+/// Refused (the moving-solid table of issue 11, README "Moving solids, every operator"): Ω₃ (moving-wall
+/// bounce-back; at full cover it reverses the fluid's velocity relative to the grain and the coupled mode grows
+/// by 1 + 2 m_fluid/m_grain per step: divergence within ~100 steps), Ω₂ (superposition: fluid seeps through
+/// moving solids, effective surface 0.15–1.4 spacings off and a free disc's drag −3 % to −21 %), and ΩΛ with
+/// light grains at high τ (diverged). Ω₁ and Ω₁ₗ pass (τ-dependent drag; see README).
+pub fn check_free_grain_operator(
+    field: &str,
+    op: lbdem_kernels::fluid::collide::SolidOperator,
+    tau: f64,
+    density_ratio: f64,
+    warnings: &mut crate::units::Warnings,
+) -> Result<()> {
+    use lbdem_kernels::fluid::collide::SolidOperator as Op;
+    let fix = "use solid_operator = \"lambda_consistent\" (Omega_Lambda, the default: stable with free rock grains, \
+               drag independent of tau with collision = \"trt\"), or \"linearized_non_equilibrium_bounce_back\" \
+               (Omega_1l)";
+    match op {
+        Op::MovingWallBounceBack => Err(LbdemError::field(
+            field,
+            op.name(),
+            "Omega_3 is unstable for free grains: at full cover it reverses the velocity of the fluid inside a \
+             grain relative to the grain, and with the grain's reaction that mode grows by 1 + 2 m_fluid/m_grain \
+             per step (divergence within ~100 steps)",
+            fix,
+        )),
+        Op::Superposition => Err(LbdemError::field(
+            field,
+            op.name(),
+            "Omega_2 lets fluid seep through moving solids: the effective surface of a sliding slab is 0.15-1.4 \
+             spacings off and a free grain's drag is 3-21 % low, growing with tau",
+            fix,
+        )),
+        Op::LambdaConsistent
+            if density_ratio <= LIGHT_GRAIN_RATIO && tau >= LIGHT_GRAIN_TAU_REFUSE =>
+        {
+            Err(LbdemError::field(
+                field,
+                op.name(),
+                &format!(
+                    "Omega_Lambda with free grains only {density_ratio:.3} times as dense as the fluid diverges at \
+                     tau = {tau:.4} (measured: a free disc with grain/fluid density <= {LIGHT_GRAIN_RATIO} diverges \
+                     at tau >= 1.2, is stable at tau <= 0.8)"
+                ),
+                "lower fluid.tau to 0.8 or below (a smaller time step), or use solid_operator = \
+                 \"linearized_non_equilibrium_bounce_back\" (Omega_1l, stable for light grains)",
+            ))
+        }
+        Op::LambdaConsistent if density_ratio < LIGHT_GRAIN_RATIO_WARN && tau > 0.8 => {
+            warnings.push(format!(
+                "{field} = \"lambda_consistent\" with grains only {density_ratio:.3} times as dense as the fluid at \
+                 tau = {tau:.4}: near the measured edge of stability (stable for grain/fluid density >= \
+                 {LIGHT_GRAIN_RATIO_WARN} up to tau = 2, diverged at <= {LIGHT_GRAIN_RATIO} from tau = 1.2); \
+                 lower tau to 0.8 if the run diverges"
+            ));
+            Ok(())
+        }
+        _ => Ok(()),
+    }
+}
