@@ -32,8 +32,11 @@ fn bodies(call: u64) -> Vec<CoupledBody<f64>> {
             let a = 8.6 + 4.9 * unit(3 * k);
             let drift = 1e-3 * call as f64;
             CoupledBody {
-                center: [12.5 + 25.0 * i + drift, 10.0 + 20.0 * j - 0.5 * drift],
-                velocity: [1e-3, -5e-4],
+                center: lbdem_kernels::math::vector(
+                    12.5 + 25.0 * i + drift,
+                    10.0 + 20.0 * j - 0.5 * drift,
+                ),
+                velocity: lbdem_kernels::math::vector(1e-3, -5e-4),
                 spin: 1e-4,
                 shape: BodyShape::Ellipse {
                     semi_major: a,

@@ -174,7 +174,7 @@ fn bonded_world() -> DemWorld<f64> {
     };
     p.world.platens[b.left].control = servo;
     p.world.platens[b.right].control = servo;
-    p.world.gravity = [0.0, -981.0];
+    p.world.gravity = lbdem_kernels::math::vector(0.0, -981.0);
     p.world
 }
 
@@ -224,7 +224,7 @@ fn coupled_world_resumes_bitwise() {
         .unwrap()
         .scene;
     let mut a: CoupledWorld = scene.build_world().unwrap();
-    a.applied[1] = ([1e-4, -2e-4], 1e-3);
+    a.applied[1] = (lbdem_kernels::math::vector(1e-4, -2e-4), 1e-3);
     a.grain_fluid_radius = vec![1.0, 0.9, 0.8, 0.95];
     for _ in 0..60 {
         a.step();

@@ -21,8 +21,8 @@ fn launched_disc(speed: f64) -> CoupledWorld {
         },
     )
     .unwrap();
-    let mut disc = Particle::disc([19.6, 20.3], 6.0, 2.0);
-    disc.velocity = [speed, 0.3 * speed];
+    let mut disc = Particle::disc(lbdem_kernels::math::vector(19.6, 20.3), 6.0, 2.0);
+    disc.velocity = lbdem_kernels::math::vector(speed, 0.3 * speed);
     disc.angular_velocity = 1e-3;
     let model = ContactModel {
         normal_stiffness: 1.0,
@@ -32,7 +32,7 @@ fn launched_disc(speed: f64) -> CoupledWorld {
         no_tension: true,
     };
     let mut dem = DemWorld::new(vec![disc], model, 1.0).unwrap();
-    dem.local_damping = 0.0; // local damping removes momentum on its own (REFERENCE §7.3): off for this check
+    dem.local_damping = 0.0; // local damping removes momentum on its own (docs/references.md §7.3): off for this check
     CoupledWorld::new(
         fluid,
         dem,
@@ -112,8 +112,9 @@ fn drifting_ellipses<T: lbdem_kernels::Real>() -> CoupledWorld<T> {
                 8.0 + 12.0 * (k % 4) as f64
             };
             let y = 11.0 + 16.0 * (k / 4) as f64 + 0.3 * t;
-            let mut p = Particle::ellipse([x, y], 0.4 * t, 5.0, 2.5, 20.0);
-            p.velocity = [0.02 - 0.004 * t, 0.01 * (t - 3.5) / 3.5];
+            let mut p =
+                Particle::ellipse(lbdem_kernels::math::vector(x, y), 0.4 * t, 5.0, 2.5, 20.0);
+            p.velocity = lbdem_kernels::math::vector(0.02 - 0.004 * t, 0.01 * (t - 3.5) / 3.5);
             p.angular_velocity = 0.004 * (t - 4.0);
             p
         })

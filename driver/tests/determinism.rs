@@ -1,5 +1,5 @@
 //! Same scene ⇒ bitwise-identical results whatever the number of threads, the band size, or the instruction
-//! set the bulk pass is compiled for (DESIGN §4).
+//! set the bulk pass is compiled for (`driver/src/engine/exec.rs`).
 use lbdem::engine::exec::SimdLevel;
 use lbdem::engine::lattice::{FluidDisc, FluidLattice};
 use lbdem_kernels::fluid::boundary::{Boundaries, SideCondition};
@@ -45,7 +45,10 @@ fn scene<T: Real>(band_rows: usize) -> FluidLattice<T> {
     lattice
 }
 
-fn run<T: Real>(threads: usize, band_rows: usize) -> (Vec<T>, Vec<[f64; 2]>) {
+fn run<T: Real>(
+    threads: usize,
+    band_rows: usize,
+) -> (Vec<T>, Vec<lbdem_kernels::math::Vector<f64>>) {
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
         .build()

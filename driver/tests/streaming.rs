@@ -22,9 +22,9 @@ fn state<T: Real>(l: &FluidLattice<T>, bodies: usize) -> Vec<u64> {
     out.extend(u.iter().flat_map(|v| bits(v)));
     out.push(l.mass().to_bits());
     out.extend(l.momentum().map(f64::to_bits));
-    let centers = vec![[3.0, 2.0]; bodies];
+    let centers = vec![lbdem_kernels::math::vector(3.0, 2.0); bodies];
     let (f, t) = l.solid_forces_and_torques(&centers);
-    out.extend(f.iter().flat_map(|v| v.map(f64::to_bits)));
+    out.extend(f.iter().flat_map(|v| [v[0].to_bits(), v[1].to_bits()]));
     out.extend(t.iter().map(|v| v.to_bits()));
     out
 }

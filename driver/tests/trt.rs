@@ -19,7 +19,11 @@ fn state<T: Real>(l: &FluidLattice<T>) -> Vec<u64> {
     let (rho, u) = l.moments();
     out.extend(bits(&rho));
     out.extend(u.iter().flat_map(|v| bits(v)));
-    out.extend(l.solid_forces(2).iter().flat_map(|v| v.map(f64::to_bits)));
+    out.extend(
+        l.solid_forces(2)
+            .iter()
+            .flat_map(|v| [v[0].to_bits(), v[1].to_bits()]),
+    );
     out
 }
 

@@ -8,6 +8,7 @@ use lbdem::output::vtk::*;
 use lbdem::units::UnitSystem;
 use lbdem_kernels::dem::assembly::ContactModel;
 use lbdem_kernels::dem::shape::Particle;
+use lbdem_kernels::math::vector;
 
 fn model() -> ContactModel<f64> {
     ContactModel {
@@ -126,7 +127,7 @@ fn particle_file_holds_the_engine_state_exactly() {
 fn shape_tensor_and_glyph_scale_describe_the_true_ellipse() {
     // An ellipse at 30°: the tensor's eigenvectors are the body axes, its eigenvalues the full axes 2a, 2b
     // (ParaView's Tensor Glyph scales a unit-diameter sphere by them), and the out-of-plane one 2b.
-    let q = Particle::ellipse([1.0, 2.0], 30f64.to_radians(), 0.3, 0.1, 2.65);
+    let q = Particle::ellipse(vector(1.0, 2.0), 30f64.to_radians(), 0.3, 0.1, 2.65);
     let w = DemWorld::new(vec![q], model(), 1e-5).unwrap();
     let v = parse_vtk_xml(&particles_vtp(&stamp(0.0), &w, None)).unwrap();
     let t = values(&v, "shape_tensor");
@@ -166,8 +167,8 @@ fn point_bond_stretched_by_a_known_amount() {
     // Two discs bonded at touch, then j moved 1e-3 cm away along the bond: eq. 6.13 gives a tensile force
     // k_b δ on each (normal force −k_b δ, compression positive), no shear, stretch δ.
     let (r, k, strength) = (0.1, 1e5, 700.0);
-    let a = Particle::disc([0.0, 0.0], r, 2.65);
-    let b = Particle::disc([2.0 * r, 0.0], r, 2.65);
+    let a = Particle::disc(vector(0.0, 0.0), r, 2.65);
+    let b = Particle::disc(vector(2.0 * r, 0.0), r, 2.65);
     let mut w = DemWorld::new(vec![a, b], model(), 1e-5).unwrap();
     w.bond_touching_pairs(
         BondSpec::Point {

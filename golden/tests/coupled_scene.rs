@@ -55,16 +55,16 @@ fn scene() -> CoupledWorld {
         lbdem::engine::dem::hexagonal_packing(3, 2, 3.5, 0.6, 0.0, 2.0, 0)
             .into_iter()
             .map(|mut p| {
-                p.position = [p.position[0] + 8.3, p.position[1] + 14.1];
-                p.velocity = [0.004, 0.0005];
+                p.position = lbdem_kernels::math::vector(p.position[0] + 8.3, p.position[1] + 14.1);
+                p.velocity = lbdem_kernels::math::vector(0.004, 0.0005);
                 p
             })
             .collect();
-    let mut a = Particle::disc([36.4, 18.7], 3.2, 2.0);
-    a.velocity = [-0.012, 0.001];
+    let mut a = Particle::disc(lbdem_kernels::math::vector(36.4, 18.7), 3.2, 2.0);
+    a.velocity = lbdem_kernels::math::vector(-0.012, 0.001);
     a.angular_velocity = 2e-3;
-    let mut b = Particle::disc([44.9, 21.2], 2.8, 2.5);
-    b.velocity = [-0.01, -0.0015];
+    let mut b = Particle::disc(lbdem_kernels::math::vector(44.9, 21.2), 2.8, 2.5);
+    b.velocity = lbdem_kernels::math::vector(-0.01, -0.0015);
     grains.push(a);
     grains.push(b);
     let model = ContactModel {

@@ -40,8 +40,9 @@ fn bonded_beam_in_three_point_bending() {
         )
         .unwrap();
     let loaded = (rows - 1) * columns + columns / 2;
-    world.external_force[loaded] = [0.0, -200.0];
-    let start: Vec<[f64; 2]> = world.particles.iter().map(|p| p.position).collect();
+    world.external_force[loaded] = lbdem_kernels::math::vector(0.0, -200.0);
+    let start: Vec<lbdem_kernels::math::Vector<f64>> =
+        world.particles.iter().map(|p| p.position).collect();
     for _ in 0..10_000 {
         world.step();
     }

@@ -10,6 +10,7 @@
 //!   lattice units), summed sequentially in the order of the share list, so the result does not depend on how
 //!   the collision was parallelised. On periodic axes, x_n − X_p is taken as the minimum image.
 use crate::coverage::{disc_cell_fraction, ellipse_cell_fraction, ellipse_cell_fraction_oriented};
+use crate::math::{Point, Vector};
 use crate::Real;
 
 /// The shape of a body as the fluid sees it (lattice units).
@@ -35,9 +36,9 @@ pub enum BodyShape<T> {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct CoupledBody<T> {
     /// Centre of mass X (node coordinates).
-    pub center: [T; 2],
+    pub center: Point<T>,
     /// Translational velocity V.
-    pub velocity: [T; 2],
+    pub velocity: Vector<T>,
     /// Angular velocity ω (per step, counter-clockwise positive).
     pub spin: T,
     /// Shape as the fluid sees it (already scaled by the fluid-radius factor).
@@ -78,12 +79,12 @@ impl<T: Real> BodyShape<T> {
 
 /// Rigid-body velocity V + ω × (x − X) at point `x`.
 #[inline]
-pub fn rigid_velocity<T: Real>(body: &CoupledBody<T>, x: [T; 2]) -> [T; 2] {
+pub fn rigid_velocity<T: Real>(body: &CoupledBody<T>, x: Point<T>) -> Vector<T> {
     let (rx, ry) = (x[0] - body.center[0], x[1] - body.center[1]);
-    [
+    Vector::new(
         body.velocity[0] - body.spin * ry,
         body.velocity[1] + body.spin * rx,
-    ]
+    )
 }
 
 /// Fraction of the unit cell centred on node (x, y) covered by the body, in [0, 1] (exact area).
@@ -189,18 +190,20 @@ fn min_image<T: Real>(d: T, period: Option<T>) -> T {
 /// `share_nodes[k]` is the node coordinate of share k, `share_owner[k]` its body, `exchange[k]` the force the
 /// share received (PSM output). `centers[p]` are the body centres; `forces` and `torques` (one per body) are
 /// overwritten. Shares whose owner is out of range are ignored. `periods` gives the lattice length of each
-/// periodic axis (for the minimum-image lever arm).
+/// periodic axis (for the minimum-image lever arm). The per-share data (`share_nodes`, `exchange`) are the
+/// lattice's own arrays, plain `[T; 2]` like the rest of the fluid side; the bodies' quantities are
+/// [`math`](crate::math) vectors.
 pub fn reduce_exchange<T: Real>(
     share_nodes: &[[T; 2]],
     share_owner: &[u32],
     exchange: &[[T; 2]],
-    centers: &[[T; 2]],
+    centers: &[Point<T>],
     periods: [Option<T>; 2],
-    forces: &mut [[T; 2]],
+    forces: &mut [Vector<T>],
     torques: &mut [T],
 ) {
     for f in forces.iter_mut() {
-        *f = [T::zero(); 2];
+        *f = Vector::zeros();
     }
     for t in torques.iter_mut() {
         *t = T::zero();
@@ -225,13 +228,13 @@ mod tests {
     #[test]
     fn rigid_velocity_of_a_spinning_body() {
         let b = CoupledBody {
-            center: [1.0f64, 2.0],
-            velocity: [0.1, -0.2],
+            center: crate::math::vector(1.0f64, 2.0),
+            velocity: crate::math::vector(0.1, -0.2),
             spin: 0.5,
             shape: BodyShape::Disc { radius: 1.0 },
         };
-        let v = rigid_velocity(&b, [1.0, 3.0]); // r = (0, 1): ω × r = (−0.5, 0)
-        assert_eq!(v, [0.1 - 0.5, -0.2]);
+        let v = rigid_velocity(&b, crate::math::vector(1.0, 3.0)); // r = (0, 1): ω × r = (−0.5, 0)
+        assert_eq!(v, crate::math::vector(0.1 - 0.5, -0.2));
     }
 
     #[test]
@@ -240,24 +243,24 @@ mod tests {
         let nodes = [[6.0f64, 5.0], [4.0, 5.0]];
         let owner = [0u32, 0];
         let ex = [[0.0, 1.0], [0.0, -1.0]];
-        let (mut f, mut t) = ([[9.0; 2]; 1], [9.0; 1]);
+        let (mut f, mut t) = ([crate::math::vector(9.0, 9.0); 1], [9.0; 1]);
         reduce_exchange(
             &nodes,
             &owner,
             &ex,
-            &[[5.0, 5.0]],
+            &[crate::math::vector(5.0, 5.0)],
             [None, None],
             &mut f,
             &mut t,
         );
-        assert_eq!(f[0], [0.0, 0.0]);
+        assert_eq!(f[0], crate::math::vector(0.0, 0.0));
         assert_eq!(t[0], 2.0);
         // Across a periodic boundary of length 10, the node at x = 9 is one to the left of a body at x = 0.
         reduce_exchange(
             &[[9.0f64, 0.0]],
             &[0],
             &[[0.0, 1.0]],
-            &[[0.0, 0.0]],
+            &[crate::math::vector(0.0, 0.0)],
             [Some(10.0), None],
             &mut f,
             &mut t,
@@ -277,8 +280,8 @@ mod tests {
         ];
         for shape in shapes {
             let b = CoupledBody {
-                center: [5.4, 6.2],
-                velocity: [0.0; 2],
+                center: crate::math::vector(5.4, 6.2),
+                velocity: crate::math::Vector::from([0.0; 2]),
                 spin: 0.0,
                 shape,
             };
@@ -295,8 +298,8 @@ mod tests {
             }
         }
         let far = CoupledBody {
-            center: [-50.0f64, 5.0],
-            velocity: [0.0; 2],
+            center: crate::math::vector(-50.0f64, 5.0),
+            velocity: crate::math::Vector::from([0.0; 2]),
             spin: 0.0,
             shape: BodyShape::Disc { radius: 1.0 },
         };
@@ -320,8 +323,8 @@ mod tests {
                 }
             };
             let b = CoupledBody {
-                center: [T::lit(10.0 + 0.123 * t), T::lit(9.5 - 0.071 * t)],
-                velocity: [T::zero(); 2],
+                center: crate::math::vector(T::lit(10.0 + 0.123 * t), T::lit(9.5 - 0.071 * t)),
+                velocity: crate::math::Vector::from([T::zero(); 2]),
                 spin: T::zero(),
                 shape,
             };

@@ -11,6 +11,7 @@
 //! and multiplies areas by 1/(ab). The area of a disc ∩ convex polygon is the sum over the polygon's edges of the
 //! signed area of disc ∩ triangle(centre, edge start, edge end), each of which is a triangle part plus circular
 //! sectors (closed form). Error: roundoff only.
+use crate::math::Point;
 use crate::Real;
 
 /// ∫₀ᵗ √(r² − s²) ds for |t| ≤ r.
@@ -28,7 +29,7 @@ fn half_chord_primitive<T: Real>(r: T, t: T) -> T {
 
 /// Exact area of the intersection of the disc (centre `c`, radius `r`) with the axis-aligned rectangle
 /// [x0, x1] × [y0, y1]. Returns 0 for empty rectangles or non-positive radii.
-pub fn disc_rectangle_area<T: Real>(c: [T; 2], r: T, x0: T, x1: T, y0: T, y1: T) -> T {
+pub fn disc_rectangle_area<T: Real>(c: Point<T>, r: T, x0: T, x1: T, y0: T, y1: T) -> T {
     if !(r > T::zero()) || !(x1 > x0) || !(y1 > y0) {
         return T::zero();
     }
@@ -96,7 +97,7 @@ pub fn disc_rectangle_area<T: Real>(c: [T; 2], r: T, x0: T, x1: T, y0: T, y1: T)
 
 /// Solid fraction of the unit cell centred on lattice point (x, y) covered by the disc (centre `c`, radius `r`,
 /// lattice units), in [0, 1].
-pub fn disc_cell_fraction<T: Real>(c: [T; 2], r: T, x: T, y: T) -> T {
+pub fn disc_cell_fraction<T: Real>(c: Point<T>, r: T, x: T, y: T) -> T {
     let h = T::lit(0.5);
     disc_rectangle_area(c, r, x - h, x + h, y - h, y + h).min(T::one())
 }
@@ -139,14 +140,14 @@ pub fn disc_triangle_signed_area<T: Real>(r: T, p: [T; 2], q: [T; 2]) -> T {
 
 /// Exact area of the ellipse (centre `c`, semi-axes `a`, `b`, orientation `theta` of the `a` axis from x)
 /// intersected with the axis-aligned rectangle `rect` = [x0, x1, y0, y1] (i.e. [x0, x1] × [y0, y1]).
-pub fn ellipse_rectangle_area<T: Real>(c: [T; 2], a: T, b: T, theta: T, rect: [T; 4]) -> T {
+pub fn ellipse_rectangle_area<T: Real>(c: Point<T>, a: T, b: T, theta: T, rect: [T; 4]) -> T {
     ellipse_rectangle_area_oriented(c, a, b, theta.portable_sin_cos(), rect)
 }
 
 /// [`ellipse_rectangle_area`] with the orientation given as `(sin θ, cos θ)` (evaluate them once for many
 /// cells); bitwise the same result for `theta.portable_sin_cos()`.
 pub fn ellipse_rectangle_area_oriented<T: Real>(
-    c: [T; 2],
+    c: Point<T>,
     a: T,
     b: T,
     (sin, cos): (T, T),
@@ -212,14 +213,14 @@ fn parallelogram_meets_unit_disc<T: Real>(p: &[[T; 2]; 4]) -> bool {
 }
 
 /// Solid fraction of the unit cell centred on lattice point (x, y) covered by an ellipse, in [0, 1].
-pub fn ellipse_cell_fraction<T: Real>(c: [T; 2], a: T, b: T, theta: T, x: T, y: T) -> T {
+pub fn ellipse_cell_fraction<T: Real>(c: Point<T>, a: T, b: T, theta: T, x: T, y: T) -> T {
     ellipse_cell_fraction_oriented(c, a, b, theta.portable_sin_cos(), x, y)
 }
 
 /// [`ellipse_cell_fraction`] with the orientation given as `(sin θ, cos θ)`; bitwise the same result for
 /// `theta.portable_sin_cos()`.
 pub fn ellipse_cell_fraction_oriented<T: Real>(
-    c: [T; 2],
+    c: Point<T>,
     a: T,
     b: T,
     sin_cos: (T, T),
@@ -242,8 +243,14 @@ mod tests {
                 (0.0, 1.0, 0.2, 1.2),
                 (1.0, 3.0, -2.0, 0.0),
             ] {
-                let d = disc_rectangle_area([cx, cy], r, x0, x1, y0, y1);
-                let e = ellipse_rectangle_area([cx, cy], r, r, 0.37, [x0, x1, y0, y1]);
+                let d: f64 = disc_rectangle_area(crate::math::vector(cx, cy), r, x0, x1, y0, y1);
+                let e: f64 = ellipse_rectangle_area(
+                    crate::math::vector(cx, cy),
+                    r,
+                    r,
+                    0.37,
+                    [x0, x1, y0, y1],
+                );
                 assert!((d - e).abs() < 1e-12, "disc {d} vs ellipse {e}");
             }
         }
@@ -254,7 +261,7 @@ mod tests {
         let (a, b) = (4.1f64, 2.05); // aspect ratio 0.5, as in the fracture test
         for k in 0..12 {
             let theta = k as f64 * 0.29;
-            let c = [10.31, 9.77];
+            let c = crate::math::vector(10.31, 9.77);
             let mut sum = 0.0;
             for y in 0..21 {
                 for x in 0..21 {
@@ -274,7 +281,7 @@ mod tests {
     fn cells_outside_an_ellipse_are_exactly_uncovered() {
         // Every cell of the bounding box whose corners and edges all stay outside the ellipse (checked by dense
         // sampling of its boundary at 1e-3 spacing, far coarser than any roundoff) has fraction exactly 0.
-        let (c, a, b) = ([10.31f64, 9.77], 6.1, 3.05);
+        let (c, a, b) = (crate::math::vector(10.31f64, 9.77), 6.1, 3.05);
         let mut zero = 0;
         for k in 0..8 {
             let theta = k as f64 * 0.41 - 1.3;
@@ -307,7 +314,7 @@ mod tests {
 
     #[test]
     fn cells_inside_an_ellipse_are_exactly_covered_and_border_cells_are_partial() {
-        let (c, a, b) = ([10.31f64, 9.77], 6.1, 3.05);
+        let (c, a, b) = (crate::math::vector(10.31f64, 9.77), 6.1, 3.05);
         let (mut full, mut partial) = (0, 0);
         for k in 0..8 {
             let theta = k as f64 * 0.41 - 1.3;
@@ -345,7 +352,14 @@ mod tests {
 
     #[test]
     fn whole_disc_inside_a_large_rectangle_has_area_pi_r_squared() {
-        let a: f64 = disc_rectangle_area([0.3, -0.2], 2.0, -10.0, 10.0, -10.0, 10.0);
+        let a: f64 = disc_rectangle_area(
+            crate::math::vector(0.3, -0.2),
+            2.0,
+            -10.0,
+            10.0,
+            -10.0,
+            10.0,
+        );
         assert!((a - core::f64::consts::PI * 4.0).abs() < 1e-12);
     }
 
@@ -353,8 +367,8 @@ mod tests {
     fn half_and_quarter_discs() {
         let r = 1.5f64;
         let full = core::f64::consts::PI * r * r;
-        let half = disc_rectangle_area([0.0, 0.0], r, 0.0, 5.0, -5.0, 5.0);
-        let quarter = disc_rectangle_area([0.0, 0.0], r, 0.0, 5.0, 0.0, 5.0);
+        let half = disc_rectangle_area(crate::math::vector(0.0, 0.0), r, 0.0, 5.0, -5.0, 5.0);
+        let quarter = disc_rectangle_area(crate::math::vector(0.0, 0.0), r, 0.0, 5.0, 0.0, 5.0);
         assert!((half - full / 2.0).abs() < 1e-12);
         assert!((quarter - full / 4.0).abs() < 1e-12);
     }
@@ -362,7 +376,7 @@ mod tests {
     #[test]
     fn fractions_of_all_cells_sum_to_the_disc_area() {
         // A disc of radius 3.3 at an off-grid centre: the exact cell fractions must add up to πr² (roundoff).
-        let (c, r) = ([10.37f64, 9.81], 3.3);
+        let (c, r) = (crate::math::vector(10.37f64, 9.81), 3.3);
         let mut sum = 0.0;
         for y in 0..21 {
             for x in 0..21 {
@@ -377,15 +391,22 @@ mod tests {
     #[test]
     fn degenerate_inputs_give_zero_not_nan() {
         assert_eq!(
-            disc_rectangle_area([0.0f64, 0.0], 0.0, -1.0, 1.0, -1.0, 1.0),
+            disc_rectangle_area(crate::math::vector(0.0f64, 0.0), 0.0, -1.0, 1.0, -1.0, 1.0),
             0.0
         );
         assert_eq!(
-            disc_rectangle_area([0.0f64, 0.0], 1.0, 1.0, 1.0, -1.0, 1.0),
+            disc_rectangle_area(crate::math::vector(0.0f64, 0.0), 1.0, 1.0, 1.0, -1.0, 1.0),
             0.0
         );
         assert_eq!(
-            disc_rectangle_area([0.0f64, 0.0], f64::NAN, -1.0, 1.0, -1.0, 1.0),
+            disc_rectangle_area(
+                crate::math::vector(0.0f64, 0.0),
+                f64::NAN,
+                -1.0,
+                1.0,
+                -1.0,
+                1.0
+            ),
             0.0
         );
     }

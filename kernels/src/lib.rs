@@ -7,6 +7,7 @@
 //! * [`fluid`]: the D2Q9 lattice-Boltzmann method of the dissertation's ch. 4 / appendix 5.A: descriptor and
 //!   equilibrium, BGK collision (eq. 4.1), the Noble–Torczynski partially-saturated collision (eq. 4.4–4.8),
 //!   Guo forcing, fused pull streaming with half-way bounce-back, Zou–He boundaries.
+//! * [`math`]: the vector, point and rotation types (nalgebra) of the DEM and the coupling.
 //! * [`dem`]: discrete elements (discs, ellipses, walls), contact detection, contact and bond laws, integration.
 //!
 //! No kernel panics on valid input; where a kernel needs scratch memory it takes it from the caller and a
@@ -20,6 +21,7 @@ pub mod coupling;
 pub mod coverage;
 pub mod dem;
 pub mod fluid;
+pub mod math;
 mod real;
 
 pub use real::Real;

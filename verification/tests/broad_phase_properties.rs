@@ -13,6 +13,7 @@ use lbdem_kernels::dem::grid::{
     build_cell_grid, candidate_pairs, carry_contact_history, cell_grid_scratch_len, CellGrid,
     GridError, PairCount,
 };
+use lbdem_kernels::math::Vector;
 use lbdem_verification::proptest_cases;
 use proptest::prelude::*;
 
@@ -32,7 +33,7 @@ fn oracle_axis(x: f64, origin: f64, h: f64, n: usize) -> usize {
     }
 }
 
-fn oracle_cell(grid: &CellGrid<f64>, p: [f64; 2]) -> (usize, usize) {
+fn oracle_cell(grid: &CellGrid<f64>, p: Vector<f64>) -> (usize, usize) {
     (
         oracle_axis(p[0], grid.origin[0], grid.cell_size, grid.nx),
         oracle_axis(p[1], grid.origin[1], grid.cell_size, grid.ny),
@@ -47,7 +48,9 @@ fn grid() -> impl Strategy<Value = CellGrid<f64>> {
         1usize..=16,
         1usize..=16,
     )
-        .prop_map(|(origin, h, nx, ny)| CellGrid::new(origin, h, nx, ny).expect("valid grid"))
+        .prop_map(|(origin, h, nx, ny)| {
+            CellGrid::new(Vector::from(origin), h, nx, ny).expect("valid grid")
+        })
 }
 
 /// A coordinate relative to the grid: mostly inside, some outside on either side, some non-finite.
@@ -59,11 +62,14 @@ fn coordinate(origin: f64, extent: f64) -> impl Strategy<Value = f64> {
     ]
 }
 
-fn grid_and_positions(max: usize) -> impl Strategy<Value = (CellGrid<f64>, Vec<[f64; 2]>)> {
+fn grid_and_positions(max: usize) -> impl Strategy<Value = (CellGrid<f64>, Vec<Vector<f64>>)> {
     grid().prop_flat_map(move |g| {
         let (ex, ey) = (g.nx as f64 * g.cell_size, g.ny as f64 * g.cell_size);
         let point = [coordinate(g.origin[0], ex), coordinate(g.origin[1], ey)];
-        (Just(g), prop::collection::vec(point, 0..max))
+        (
+            Just(g),
+            prop::collection::vec(point.prop_map(|[x, y]| Vector::new(x, y)), 0..max),
+        )
     })
 }
 
@@ -89,14 +95,14 @@ proptest! {
     ) {
         let h = 2f64.powi(k);
         let origin = [ox as f64 / 1024.0, oy as f64 / 1024.0];
-        let g = CellGrid::new(origin, h, nx, ny).expect("valid grid");
+        let g = CellGrid::new(Vector::from(origin), h, nx, ny).expect("valid grid");
         for t in ts {
             // A multiple of 1/1024 inside the grid.
             let p = [
                 origin[0] + ((t[0] * nx as f64 * h) * 1024.0).floor() / 1024.0,
                 origin[1] + ((t[1] * ny as f64 * h) * 1024.0).floor() / 1024.0,
             ];
-            let (ix, iy) = g.cell_coords(p);
+            let (ix, iy) = g.cell_coords(Vector::from(p));
             prop_assert!(ix < nx && iy < ny);
             prop_assert!(origin[0] + ix as f64 * h <= p[0] && p[0] < origin[0] + (ix + 1) as f64 * h, "x {} in cell {}", p[0], ix);
             prop_assert!(origin[1] + iy as f64 * h <= p[1] && p[1] < origin[1] + (iy + 1) as f64 * h, "y {} in cell {}", p[1], iy);
@@ -137,10 +143,10 @@ proptest! {
         margin in 0.0f64..=0.05,
     ) {
         let h = 2.0 * 0.25 + margin;
-        let g = CellGrid::new(origin, h, nx, ny).expect("valid grid");
-        let positions: Vec<[f64; 2]> = pts
+        let g = CellGrid::new(Vector::from(origin), h, nx, ny).expect("valid grid");
+        let positions: Vec<Vector<f64>> = pts
             .iter()
-            .map(|(t, _)| [origin[0] + t[0] * nx as f64 * h, origin[1] + t[1] * ny as f64 * h])
+            .map(|(t, _)| Vector::new(origin[0] + t[0] * nx as f64 * h, origin[1] + t[1] * ny as f64 * h))
             .collect();
         let radii: Vec<f64> = pts.iter().map(|p| p.1).collect();
         let mut start = vec![0; g.nx * g.ny + 1];
@@ -172,9 +178,9 @@ proptest! {
         min_size in 0.05f64..=5.0, cap in 0usize..=40,
     ) {
         let hi = [lo[0] + extent[0], lo[1] + extent[1]];
-        let g = CellGrid::covering(lo, hi, min_size, cap).expect("a valid box");
+        let g = CellGrid::covering(Vector::from(lo), Vector::from(hi), min_size, cap).expect("a valid box");
         prop_assert!(g.is_valid());
-        prop_assert_eq!(g.origin, lo);
+        prop_assert_eq!(g.origin, Vector::from(lo));
         prop_assert!(g.cell_size >= min_size);
         for (n, e) in [(g.nx, hi[0] - lo[0]), (g.ny, hi[1] - lo[1])] {
             let fit = ((e / min_size).floor() as usize).clamp(1, cap.max(1));
@@ -242,16 +248,16 @@ fn bad_geometry_is_refused_everywhere() {
         ([0.0, 0.0], 1.0, usize::MAX, 2),
         ([0.0, 0.0], 1.0, usize::MAX, 1),
     ];
-    let positions = [[0.5, 0.5], [0.7, 0.5]];
+    let positions = [Vector::new(0.5, 0.5), Vector::new(0.7, 0.5)];
     let radii = [0.2, 0.2];
     for (origin, size, nx, ny) in bad {
         assert_eq!(
-            CellGrid::new(origin, size, nx, ny),
+            CellGrid::new(Vector::from(origin), size, nx, ny),
             Err(GridError::BadGeometry),
             "size {size}, {nx} × {ny}"
         );
         let g = CellGrid {
-            origin,
+            origin: Vector::from(origin),
             cell_size: size,
             nx,
             ny,
@@ -271,7 +277,7 @@ fn bad_geometry_is_refused_everywhere() {
     }
     // Counts saturate instead of overflowing for such field values.
     let huge = CellGrid {
-        origin: [0.0, 0.0],
+        origin: Vector::new(0.0, 0.0),
         cell_size: 1.0,
         nx: usize::MAX,
         ny: 2,
@@ -286,8 +292,12 @@ fn bad_geometry_is_refused_everywhere() {
 /// Every buffer of the wrong length is refused with `BufferLength`, by both passes, without writing pairs.
 #[test]
 fn wrong_buffer_lengths_are_refused() {
-    let g = CellGrid::new([-1.0, 2.0], 1.0, 3, 2).expect("valid grid");
-    let positions = [[-0.5, 2.5], [0.2, 2.5], [1.5, 3.5]];
+    let g = CellGrid::new(Vector::new(-1.0, 2.0), 1.0, 3, 2).expect("valid grid");
+    let positions = [
+        Vector::new(-0.5, 2.5),
+        Vector::new(0.2, 2.5),
+        Vector::new(1.5, 3.5),
+    ];
     let radii = [0.6; 3];
     let (sl, ol) = cell_grid_scratch_len(&g, positions.len());
     assert_eq!((sl, ol), (7, 3));
@@ -336,8 +346,12 @@ fn wrong_buffer_lengths_are_refused() {
 /// cells and no panic; entries that name particles out of range are skipped.
 #[test]
 fn corrupted_offset_tables_yield_no_pairs_instead_of_a_panic() {
-    let g = CellGrid::new([0.0, 0.0], 1.0, 2, 1).expect("valid grid");
-    let positions = [[0.2, 0.5], [0.4, 0.5], [1.5, 0.5]];
+    let g = CellGrid::new(Vector::new(0.0, 0.0), 1.0, 2, 1).expect("valid grid");
+    let positions = [
+        Vector::new(0.2, 0.5),
+        Vector::new(0.4, 0.5),
+        Vector::new(1.5, 0.5),
+    ];
     let radii = [1.0; 3];
     let mut pairs = [[0usize; 2]; 8];
     // Decreasing: cell 0 = 2..1, cell 1 = 1..3.

@@ -15,6 +15,7 @@ use lbdem_kernels::coupling::{
     PreparedBody,
 };
 use lbdem_kernels::coverage::{disc_cell_fraction, ellipse_cell_fraction};
+use lbdem_kernels::math::{Point, Vector};
 use lbdem_reference::coverage as oracle;
 use lbdem_verification::proptest_cases;
 use proptest::prelude::*;
@@ -49,8 +50,8 @@ fn body() -> impl Strategy<Value = CoupledBody<f64>> {
         shape(),
     )
         .prop_map(|(center, velocity, spin, shape)| CoupledBody {
-            center,
-            velocity,
+            center: Vector::from(center),
+            velocity: Vector::from(velocity),
             spin,
             shape,
         })
@@ -60,7 +61,7 @@ fn body() -> impl Strategy<Value = CoupledBody<f64>> {
 fn as_ellipse(b: &CoupledBody<f64>) -> oracle::Ellipse {
     match b.shape {
         BodyShape::Disc { radius } => oracle::Ellipse {
-            centre: b.center,
+            centre: b.center.into(),
             a: radius,
             b: radius,
             angle: 0.0,
@@ -70,7 +71,7 @@ fn as_ellipse(b: &CoupledBody<f64>) -> oracle::Ellipse {
             semi_minor,
             angle,
         } => oracle::Ellipse {
-            centre: b.center,
+            centre: b.center.into(),
             a: semi_major,
             b: semi_minor,
             angle,
@@ -147,6 +148,8 @@ fn direct_sums(
     (f, t, size)
 }
 
+/// The kernel's reduction with the bodies' centres and forces as `math` vectors, converted from and to the
+/// plain arrays of these tests.
 fn kernel_reduce(
     s: &Shares,
     centers: &[[f64; 2]],
@@ -155,11 +158,12 @@ fn kernel_reduce(
     let nodes: Vec<[f64; 2]> = s.iter().map(|x| x.0).collect();
     let owners: Vec<u32> = s.iter().map(|x| x.1).collect();
     let ex: Vec<[f64; 2]> = s.iter().map(|x| x.2).collect();
+    let centers: Vec<Point<f64>> = centers.iter().map(|&c| Point::from(c)).collect();
     // Garbage in the outputs: they must be overwritten.
-    let mut f = vec![[f64::NAN; 2]; centers.len()];
+    let mut f = vec![Vector::new(f64::NAN, f64::NAN); centers.len()];
     let mut t = vec![f64::NAN; centers.len()];
-    reduce_exchange(&nodes, &owners, &ex, centers, periods, &mut f, &mut t);
-    (f, t)
+    reduce_exchange(&nodes, &owners, &ex, &centers, periods, &mut f, &mut t);
+    (f.into_iter().map(|v| v.into()).collect(), t)
 }
 
 proptest! {
@@ -169,12 +173,12 @@ proptest! {
     /// of two points is perpendicular to their separation (a rigid motion keeps distances).
     #[test]
     fn rigid_velocity_is_v_plus_omega_cross_r(b in body(), p in [-40.0f64..40.0, -40.0f64..40.0], q in [-40.0f64..40.0, -40.0f64..40.0]) {
-        let v = rigid_velocity(&b, p);
+        let v = rigid_velocity(&b, Vector::from(p));
         let (rx, ry) = (p[0] - b.center[0], p[1] - b.center[1]);
         // a − s·r_y and a + s·r_x: the same correctly rounded operations as the formula, so bitwise.
-        prop_assert_eq!(v, [b.velocity[0] - b.spin * ry, b.velocity[1] + b.spin * rx]);
+        prop_assert_eq!(v, Vector::new(b.velocity[0] - b.spin * ry, b.velocity[1] + b.spin * rx));
         prop_assert_eq!(rigid_velocity(&b, b.center), b.velocity);
-        let w = rigid_velocity(&b, q);
+        let w = rigid_velocity(&b, Vector::from(q));
         let (dv, dx) = ([v[0] - w[0], v[1] - w[1]], [p[0] - q[0], p[1] - q[1]]);
         let dot = dv[0] * dx[0] + dv[1] * dx[1];
         // |ω| ≤ 0.05 and |x| ≤ 70: each term ≤ 0.05 · 140², with a few ulp of roundoff each.
@@ -219,10 +223,7 @@ proptest! {
     fn body_fractions_within_the_cell_range(b in body(), nx in 1usize..=30, ny in 1usize..=30, at in [0.0f64..=1.0, 0.0f64..=1.0]) {
         let mut b = b;
         let reach = b.shape.reach();
-        b.center = [
-            -0.5 - reach + at[0] * (nx as f64 + 2.0 * reach),
-            -0.5 - reach + at[1] * (ny as f64 + 2.0 * reach),
-        ];
+        b.center = lbdem_kernels::math::vector(-0.5 - reach + at[0] * (nx as f64 + 2.0 * reach), -0.5 - reach + at[1] * (ny as f64 + 2.0 * reach));
         let prepared = PreparedBody::new(&b);
         let range = body_cell_range(&b, nx, ny);
         let (mut sum, mut touched) = (0.0, 0usize);
@@ -267,7 +268,7 @@ proptest! {
         } else {
             BodyShape::Ellipse { semi_major: r, semi_minor: 0.5 * r, angle }
         };
-        let b = CoupledBody { center: [cx, cy], velocity: [0.0; 2], spin: 0.0, shape };
+        let b = CoupledBody { center: lbdem_kernels::math::vector(cx, cy), velocity: lbdem_kernels::math::Vector::zeros(), spin: 0.0, shape };
         let want = match (cells_meeting(cx, r, nx), cells_meeting(cy, r, ny)) {
             (Some((x0, x1)), Some((y0, y1))) => Some([x0, x1, y0, y1]),
             _ => None,
@@ -335,8 +336,8 @@ proptest! {
 #[test]
 fn cell_range_refuses_non_finite_bodies_and_empty_lattices() {
     let body = |center: [f64; 2], radius: f64| CoupledBody {
-        center,
-        velocity: [0.0; 2],
+        center: Vector::from(center),
+        velocity: lbdem_kernels::math::Vector::zeros(),
         spin: 0.0,
         shape: BodyShape::Disc { radius },
     };
@@ -362,9 +363,9 @@ fn reduction_ignores_bodies_without_every_slot() {
     let nodes = [[1.0, 0.0], [0.0, 1.0], [2.0, 2.0]];
     let owners = [0u32, 1, 2];
     let ex = [[0.0, 1.0], [1.0, 0.0], [1.0, 1.0]];
-    let centers = [[0.0, 0.0]; 3];
+    let centers = [Point::<f64>::zeros(); 3];
     for (nf, nt) in [(3, 1), (1, 3), (2, 2)] {
-        let mut f = vec![[f64::NAN; 2]; nf];
+        let mut f = vec![Vector::new(f64::NAN, f64::NAN); nf];
         let mut t = vec![f64::NAN; nt];
         reduce_exchange(&nodes, &owners, &ex, &centers, [None, None], &mut f, &mut t);
         let n = nf.min(nt);
@@ -374,7 +375,7 @@ fn reduction_ignores_bodies_without_every_slot() {
         for p in 0..nf {
             assert_eq!(
                 f[p],
-                if p < n { want_f[p] } else { [0.0; 2] },
+                Vector::from(if p < n { want_f[p] } else { [0.0; 2] }),
                 "force {p} of {nf}/{nt}"
             );
         }
@@ -387,7 +388,7 @@ fn reduction_ignores_bodies_without_every_slot() {
         }
     }
     // Fewer centres than slots: shares of bodies without a centre are dropped.
-    let mut f = vec![[f64::NAN; 2]; 3];
+    let mut f = vec![Vector::new(f64::NAN, f64::NAN); 3];
     let mut t = vec![f64::NAN; 3];
     reduce_exchange(
         &nodes,
@@ -400,7 +401,10 @@ fn reduction_ignores_bodies_without_every_slot() {
     );
     assert_eq!(
         (f, t),
-        (vec![[0.0, 1.0], [0.0; 2], [0.0; 2]], vec![1.0, 0.0, 0.0])
+        (
+            vec![Vector::new(0.0, 1.0), Vector::zeros(), Vector::zeros()],
+            vec![1.0, 0.0, 0.0]
+        )
     );
 }
 
@@ -410,13 +414,13 @@ fn reduction_ignores_bodies_without_every_slot() {
 #[test]
 fn minimum_image_keeps_half_a_period_and_ignores_non_positive_periods() {
     let torque = |node: [f64; 2], period: Option<f64>| {
-        let (mut f, mut t) = ([[0.0; 2]; 1], [0.0; 1]);
+        let (mut f, mut t) = ([lbdem_kernels::math::Vector::<f64>::zeros(); 1], [0.0; 1]);
         // Force (0, 1) at lever (d, 0): torque d.
         reduce_exchange(
             &[node],
             &[0],
             &[[0.0, 1.0]],
-            &[[10.0, 0.0]],
+            &[lbdem_kernels::math::vector(10.0, 0.0)],
             [period, None],
             &mut f,
             &mut t,

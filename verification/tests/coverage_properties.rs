@@ -19,6 +19,7 @@ use lbdem_kernels::coverage::{
     disc_cell_fraction, disc_rectangle_area, disc_triangle_signed_area, ellipse_cell_fraction,
     ellipse_cell_fraction_oriented, ellipse_rectangle_area, ellipse_rectangle_area_oriented,
 };
+use lbdem_kernels::math::{vector, Vector};
 use lbdem_kernels::Real;
 use lbdem_reference::coverage as oracle;
 use lbdem_verification::proptest_cases;
@@ -112,7 +113,7 @@ fn picks() -> impl Strategy<Value = Vec<(f64, f64)>> {
 }
 
 fn kernel_ellipse_fraction(e: &oracle::Ellipse, x: f64, y: f64) -> f64 {
-    ellipse_cell_fraction(e.centre, e.a, e.b, e.angle, x, y)
+    ellipse_cell_fraction(Vector::from(e.centre), e.a, e.b, e.angle, x, y)
 }
 
 proptest! {
@@ -125,7 +126,7 @@ proptest! {
         let (c, r) = (d.centre, d.a);
         let (mut sum, mut touched) = (0.0, 0usize);
         for (x, y) in nodes_near(&d) {
-            let f = disc_cell_fraction(c, r, x, y);
+            let f = disc_cell_fraction(Vector::from(c), r, x, y);
             prop_assert!((0.0..=1.0).contains(&f), "cell ({x}, {y}): {f}");
             sum += f;
             touched += usize::from(f > 0.0);
@@ -133,7 +134,7 @@ proptest! {
         let tol = cell_roundoff(r) * touched as f64;
         prop_assert!((sum - PI * r * r).abs() <= tol, "sum {sum} vs {} over {touched} cells", PI * r * r);
         for (x, y) in probe_nodes(&d, &picks) {
-            let f = disc_cell_fraction(c, r, x, y);
+            let f = disc_cell_fraction(Vector::from(c), r, x, y);
             let want = oracle::ellipse_rectangle_area(&d, oracle::cell(x, y), SAMPLES);
             let slack = cell_roundoff(r);
             prop_assert!(f >= want.lo - slack && f <= want.hi + slack, "cell ({x}, {y}): {f} vs {want:?}");
@@ -149,7 +150,7 @@ proptest! {
         for (x, y) in nodes_near(&e) {
             let f = kernel_ellipse_fraction(&e, x, y);
             prop_assert!((0.0..=1.0).contains(&f), "cell ({x}, {y}): {f}");
-            let g = ellipse_cell_fraction_oriented(e.centre, e.a, e.b, sin_cos, x, y);
+            let g = ellipse_cell_fraction_oriented(Vector::from(e.centre), e.a, e.b, sin_cos, x, y);
             prop_assert_eq!(f.to_bits(), g.to_bits());
             sum += f;
             touched += usize::from(f > 0.0);
@@ -175,18 +176,18 @@ proptest! {
         let rect = [corner[0], corner[0] + w, corner[1], corner[1] + h];
         // An empty rectangle (x1 ≤ x0) covers nothing.
         if flip {
-            prop_assert_eq!(disc_rectangle_area(d.centre, d.a, rect[1], rect[0], rect[2], rect[3]), 0.0);
-            prop_assert_eq!(ellipse_rectangle_area(e.centre, e.a, e.b, e.angle, [rect[0], rect[1], rect[3], rect[2]]), 0.0);
+            prop_assert_eq!(disc_rectangle_area(Vector::from(d.centre), d.a, rect[1], rect[0], rect[2], rect[3]), 0.0);
+            prop_assert_eq!(ellipse_rectangle_area(Vector::from(e.centre), e.a, e.b, e.angle, [rect[0], rect[1], rect[3], rect[2]]), 0.0);
         }
         let samples = 2 * SAMPLES;
-        let got = disc_rectangle_area(d.centre, d.a, rect[0], rect[1], rect[2], rect[3]);
+        let got = disc_rectangle_area(Vector::from(d.centre), d.a, rect[0], rect[1], rect[2], rect[3]);
         let want = oracle::ellipse_rectangle_area(&d, rect, samples);
         // Each cell-sized piece of the rectangle carries the per-cell roundoff.
         let pieces = (w.max(1.0) * h.max(1.0)).min(PI * (d.a + 1.0) * (d.a + 1.0));
         let slack = cell_roundoff(d.a) * pieces;
         prop_assert!(got >= want.lo - slack && got <= want.hi + slack, "disc {got} vs {want:?}");
-        let got = ellipse_rectangle_area(e.centre, e.a, e.b, e.angle, rect);
-        let oriented = ellipse_rectangle_area_oriented(e.centre, e.a, e.b, e.angle.portable_sin_cos(), rect);
+        let got = ellipse_rectangle_area(Vector::from(e.centre), e.a, e.b, e.angle, rect);
+        let oriented = ellipse_rectangle_area_oriented(Vector::from(e.centre), e.a, e.b, e.angle.portable_sin_cos(), rect);
         prop_assert_eq!(got.to_bits(), oriented.to_bits());
         let want = oracle::ellipse_rectangle_area(&e, rect, samples);
         let pieces = (w.max(1.0) * h.max(1.0)).min(PI * (e.a + 1.0) * (e.a + 1.0));
@@ -216,7 +217,7 @@ proptest! {
             for x in 0..nx {
                 let (x, y) = (x as f64, y as f64);
                 let f = if is_disc {
-                    disc_cell_fraction(e.centre, e.a, x, y)
+                    disc_cell_fraction(Vector::from(e.centre), e.a, x, y)
                 } else {
                     kernel_ellipse_fraction(&e, x, y)
                 };
@@ -249,7 +250,7 @@ proptest! {
         let (mut empty, mut full) = (0, 0);
         for (x, y) in nodes_near(&e) {
             let f = if is_disc {
-                disc_cell_fraction(e.centre, e.a, x, y)
+                disc_cell_fraction(Vector::from(e.centre), e.a, x, y)
             } else {
                 kernel_ellipse_fraction(&e, x, y)
             };
@@ -314,16 +315,16 @@ proptest! {
         let tol = 2.0 * cell_roundoff(d.a);
         let (sx, sy) = (shift[0] as f64, shift[1] as f64);
         for (x, y) in probe_nodes(&d, &picks) {
-            let a = disc_cell_fraction(d.centre, d.a, x, y);
-            let b = ellipse_cell_fraction(d.centre, d.a, d.a, angle, x, y);
+            let a = disc_cell_fraction(Vector::from(d.centre), d.a, x, y);
+            let b = ellipse_cell_fraction(Vector::from(d.centre), d.a, d.a, angle, x, y);
             prop_assert!((a - b).abs() <= tol, "cell ({x}, {y}): {a} vs {b}");
-            let moved = disc_cell_fraction([d.centre[0] + sx, d.centre[1] + sy], d.a, x + sx, y + sy);
+            let moved = disc_cell_fraction(Vector::from([d.centre[0] + sx, d.centre[1] + sy]), d.a, x + sx, y + sy);
             prop_assert!((a - moved).abs() <= tol, "translated cell ({x}, {y}): {a} vs {moved}");
-            let turned = disc_cell_fraction([-d.centre[1], d.centre[0]], d.a, -y, x);
+            let turned = disc_cell_fraction(Vector::from([-d.centre[1], d.centre[0]]), d.a, -y, x);
             prop_assert!((a - turned).abs() <= tol, "turned cell ({x}, {y}): {a} vs {turned}");
             let (c32, r32) = ([d.centre[0] as f32, d.centre[1] as f32], d.a as f32);
-            let f = disc_cell_fraction(c32, r32, x as f32, y as f32) as f64;
-            let g = disc_cell_fraction([c32[0] as f64, c32[1] as f64], r32 as f64, x, y);
+            let f = disc_cell_fraction(Vector::from(c32), r32, x as f32, y as f32) as f64;
+            let g = disc_cell_fraction(Vector::from([c32[0] as f64, c32[1] as f64]), r32 as f64, x, y);
             let tol32 = tol * (f32::EPSILON as f64 / f64::EPSILON);
             prop_assert!((f - g).abs() <= tol32, "f32 cell ({x}, {y}): f32 {f} vs f64 {g}");
         }
@@ -358,8 +359,8 @@ proptest! {
         // cell_roundoff scaled from f64's ε to f32's.
         let tol = cell_roundoff(e.a) * (f32::EPSILON as f64 / f64::EPSILON);
         for (x, y) in probe_nodes(&e, &picks) {
-            let f = ellipse_cell_fraction(c32, a32, b32, t32, x as f32, y as f32) as f64;
-            let g = ellipse_cell_fraction(c64, a64, b64, t64, x, y);
+            let f = ellipse_cell_fraction(Vector::from(c32), a32, b32, t32, x as f32, y as f32) as f64;
+            let g = ellipse_cell_fraction(Vector::from(c64), a64, b64, t64, x, y);
             prop_assert!((f - g).abs() <= tol, "ellipse cell ({x}, {y}): f32 {f} vs f64 {g}");
         }
     }
@@ -379,18 +380,21 @@ fn degenerate_bodies_and_rectangles_cover_nothing() {
     for rect in rects {
         let [x0, x1, y0, y1] = rect;
         for bad in [0.0, -1.0, -2.5, f64::NAN] {
-            assert_eq!(disc_rectangle_area([0.0, 0.0], bad, x0, x1, y0, y1), 0.0);
+            assert_eq!(
+                disc_rectangle_area(vector(0.0, 0.0), bad, x0, x1, y0, y1),
+                0.0
+            );
             for theta in [0.0, 0.3, 2.0] {
                 assert_eq!(
-                    ellipse_rectangle_area([0.0, 0.0], bad, 1.0, theta, rect),
+                    ellipse_rectangle_area(vector(0.0, 0.0), bad, 1.0, theta, rect),
                     0.0
                 );
                 assert_eq!(
-                    ellipse_rectangle_area([0.0, 0.0], 1.0, bad, theta, rect),
+                    ellipse_rectangle_area(vector(0.0, 0.0), 1.0, bad, theta, rect),
                     0.0
                 );
                 assert_eq!(
-                    ellipse_rectangle_area([0.0, 0.0], bad, bad, theta, rect),
+                    ellipse_rectangle_area(vector(0.0, 0.0), bad, bad, theta, rect),
                     0.0
                 );
             }
@@ -401,9 +405,12 @@ fn degenerate_bodies_and_rectangles_cover_nothing() {
         (-1.0, 1.0, 1.0, -1.0),
         (f64::NAN, 1.0, -1.0, 1.0),
     ] {
-        assert_eq!(disc_rectangle_area([0.0, 0.0], 1.0, x0, x1, y0, y1), 0.0);
         assert_eq!(
-            ellipse_rectangle_area([0.0, 0.0], 2.0, 1.0, 0.3, [x0, x1, y0, y1]),
+            disc_rectangle_area(vector(0.0, 0.0), 1.0, x0, x1, y0, y1),
+            0.0
+        );
+        assert_eq!(
+            ellipse_rectangle_area(vector(0.0, 0.0), 2.0, 1.0, 0.3, [x0, x1, y0, y1]),
             0.0
         );
     }
@@ -417,12 +424,12 @@ fn degenerate_bodies_and_rectangles_cover_nothing() {
         let theta = t * 5.0;
         for rect in [[x, x, y - 3.0, y + 3.0], [x - 3.0, x + 3.0, y, y]] {
             assert_eq!(
-                ellipse_rectangle_area([0.1, -0.2], 2.0, 0.7, theta, rect),
+                ellipse_rectangle_area(vector(0.1, -0.2), 2.0, 0.7, theta, rect),
                 0.0,
                 "{rect:?}"
             );
             assert_eq!(
-                disc_rectangle_area([0.1, -0.2], 1.3, rect[0], rect[1], rect[2], rect[3]),
+                disc_rectangle_area(vector(0.1, -0.2), 1.3, rect[0], rect[1], rect[2], rect[3]),
                 0.0
             );
         }
@@ -439,13 +446,13 @@ fn a_body_inside_one_cell_covers_its_own_area() {
         // |c| + a ≤ 0.25 + 0.216 < ½ on each axis: the body stays inside the cell.
         let c = [0.25 * (t * 0.37).sin(), 0.25 * (t * 0.61).cos()];
         let theta = 0.7 * t;
-        let f = ellipse_cell_fraction(c, a, b, theta, 0.0, 0.0);
+        let f = ellipse_cell_fraction(Vector::from(c), a, b, theta, 0.0, 0.0);
         assert!(
             (f - PI * a * b).abs() <= cell_roundoff(1.0),
             "{f} vs {}",
             PI * a * b
         );
-        let g = disc_cell_fraction(c, a, 0.0, 0.0);
+        let g = disc_cell_fraction(Vector::from(c), a, 0.0, 0.0);
         assert!((g - PI * a * a).abs() <= cell_roundoff(1.0), "{g}");
     }
 }

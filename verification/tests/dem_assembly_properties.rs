@@ -30,6 +30,8 @@ use lbdem_kernels::dem::shape::{Particle, Wall};
 use lbdem_verification::proptest_cases;
 use proptest::prelude::*;
 
+type V = lbdem_kernels::math::Vector<f64>;
+
 fn config(default: u32) -> ProptestConfig {
     ProptestConfig::with_cases(proptest_cases(default))
 }
@@ -57,11 +59,17 @@ fn particle() -> impl Strategy<Value = Particle<f64>> {
     )
         .prop_map(|(x, a, aspect, angle, disc, v, w)| {
             let mut p = if disc {
-                Particle::disc(x, a, 2.5)
+                Particle::disc(lbdem_kernels::math::Vector::from(x), a, 2.5)
             } else {
-                Particle::ellipse(x, angle, a, a * aspect, 2.5)
+                Particle::ellipse(
+                    lbdem_kernels::math::Vector::from(x),
+                    angle,
+                    a,
+                    a * aspect,
+                    2.5,
+                )
             };
-            p.velocity = v;
+            p.velocity = lbdem_kernels::math::Vector::from(v);
             p.angular_velocity = w;
             p
         })
@@ -89,7 +97,7 @@ fn chunks_reversed(len: usize, size: usize) -> Vec<std::ops::Range<usize>> {
 }
 
 /// Bit patterns of force and torque buffers (bitwise comparison, NaN-safe).
-fn bits(f: &[[f64; 2]], t: &[f64]) -> Vec<u64> {
+fn bits(f: &[V], t: &[f64]) -> Vec<u64> {
     f.iter()
         .flat_map(|v| [v[0].to_bits(), v[1].to_bits()])
         .chain(t.iter().map(|x| x.to_bits()))
@@ -97,21 +105,15 @@ fn bits(f: &[[f64; 2]], t: &[f64]) -> Vec<u64> {
 }
 
 /// Σ F and Σ (τ + x × F) of the increments from (f0, t0) to (f, t), and the size Σ|term| of what was added.
-fn balance(
-    ps: &[Particle<f64>],
-    f0: &[[f64; 2]],
-    t0: &[f64],
-    f: &[[f64; 2]],
-    t: &[f64],
-) -> ([f64; 2], f64, f64) {
+fn balance(ps: &[Particle<f64>], f0: &[V], t0: &[f64], f: &[V], t: &[f64]) -> ([f64; 2], f64, f64) {
     let (mut sum, mut moment, mut size) = ([0.0; 2], 0.0, 0.0);
     for k in 0..ps.len() {
         let df = [f[k][0] - f0[k][0], f[k][1] - f0[k][1]];
         let dt_k = t[k] - t0[k];
         sum[0] += df[0];
         sum[1] += df[1];
-        moment += dt_k + cross(ps[k].position, df);
-        size += df[0].abs() + df[1].abs() + dt_k.abs() + cross(ps[k].position, df).abs();
+        moment += dt_k + cross(ps[k].position.into(), df);
+        size += df[0].abs() + df[1].abs() + dt_k.abs() + cross(ps[k].position.into(), df).abs();
     }
     (sum, moment, size)
 }
@@ -146,10 +148,10 @@ fn moved(ps: &[Particle<f64>], dt: f64) -> Vec<Particle<f64>> {
     ps.iter()
         .map(|p| {
             let mut q = *p;
-            q.position = [
+            q.position = lbdem_kernels::math::vector(
                 p.position[0] + p.velocity[0] * dt,
                 p.position[1] + p.velocity[1] * dt,
-            ];
+            );
             q.angle += p.angular_velocity * dt;
             q
         })
@@ -158,13 +160,19 @@ fn moved(ps: &[Particle<f64>], dt: f64) -> Vec<Particle<f64>> {
 
 fn walls(tilt: f64, speed: [f64; 3], active: [bool; 3]) -> [WallBody<f64>; 3] {
     let w = [
-        Wall::from_angle([0.0, 0.15], std::f64::consts::FRAC_PI_2 + tilt),
-        Wall::from_angle([0.15, 0.0], tilt),
-        Wall::from_angle([0.85, 1.0], -std::f64::consts::FRAC_PI_2 + tilt),
+        Wall::from_angle(
+            lbdem_kernels::math::vector(0.0, 0.15),
+            std::f64::consts::FRAC_PI_2 + tilt,
+        ),
+        Wall::from_angle(lbdem_kernels::math::vector(0.15, 0.0), tilt),
+        Wall::from_angle(
+            lbdem_kernels::math::vector(0.85, 1.0),
+            -std::f64::consts::FRAC_PI_2 + tilt,
+        ),
     ];
     std::array::from_fn(|k| WallBody {
         wall: w[k],
-        velocity: [w[k].normal[0] * speed[k], w[k].normal[1] * speed[k]],
+        velocity: lbdem_kernels::math::vector(w[k].normal[0] * speed[k], w[k].normal[1] * speed[k]),
         active: active[k],
     })
 }
@@ -184,7 +192,7 @@ proptest! {
         let n = ps.len();
         let m = model(restitution);
         let pairs = all_pairs(n);
-        let f0: Vec<[f64; 2]> = start[..n].iter().map(|s| s.0).collect();
+        let f0: Vec<V> = start[..n].iter().map(|s| V::from(s.0)).collect();
         let t0: Vec<f64> = start[..n].iter().map(|s| s.1).collect();
         let (mut f, mut t) = (f0.clone(), t0.clone());
         let mut shear = vec![0.0; pairs.len()];
@@ -242,7 +250,7 @@ proptest! {
         let n = ps.len();
         let mut bonds = make_bonds(&ps, &picks);
         let now = moved(&ps, 2e-3);
-        let (mut f, mut t) = (vec![[0.0; 2]; n], vec![0.0; n]);
+        let (mut f, mut t) = (vec![lbdem_kernels::math::Vector::<f64>::zeros(); n], vec![0.0; n]);
         let mut slots = vec![BondForce::zero(); bonds.len()];
         bond_forces(&now, &mut bonds, 1e-3, &mut slots).expect("valid input");
         let broke = add_bond_forces(&bonds, &slots, &mut f, &mut t).expect("valid input");
@@ -253,18 +261,18 @@ proptest! {
             }
         }
         // Only the bonds that did not break: their forces by hand, in bond order.
-        let (mut fh, mut th) = (vec![[0.0; 2]; n], vec![0.0; n]);
+        let (mut fh, mut th) = (vec![lbdem_kernels::math::Vector::<f64>::zeros(); n], vec![0.0; n]);
         for (b, s) in bonds.iter().zip(&slots) {
             if s.broke.is_none() {
                 let [i, j] = b.pair;
-                fh[i] = [fh[i][0] + s.force_on_i[0], fh[i][1] + s.force_on_i[1]];
-                fh[j] = [fh[j][0] + s.force_on_j[0], fh[j][1] + s.force_on_j[1]];
+                fh[i] = lbdem_kernels::math::vector(fh[i][0] + s.force_on_i[0], fh[i][1] + s.force_on_i[1]);
+                fh[j] = lbdem_kernels::math::vector(fh[j][0] + s.force_on_j[0], fh[j][1] + s.force_on_j[1]);
                 th[i] += s.torque_on_i;
                 th[j] += s.torque_on_j;
             }
         }
         prop_assert_eq!(bits(&f, &t), bits(&fh, &th));
-        let zero = (vec![[0.0; 2]; n], vec![0.0; n]);
+        let zero = (vec![lbdem_kernels::math::Vector::<f64>::zeros(); n], vec![0.0; n]);
         let (sum, moment, size) = balance(&now, &zero.0, &zero.1, &f, &t);
         let tol = 64.0 * (n * n + bonds.len()) as f64 * f64::EPSILON * size + 1e-300;
         prop_assert!(sum[0].abs() <= tol && sum[1].abs() <= tol, "Σ F = {sum:?} (tol {tol:e})");
@@ -284,10 +292,10 @@ proptest! {
         let ws = walls(tilt, speed, active);
         let n = ps.len();
         let len = wall_contacts_scratch_len(n, ws.len()).unwrap();
-        let (mut f, mut t) = (vec![[0.0; 2]; n], vec![0.0; n]);
+        let (mut f, mut t) = (vec![lbdem_kernels::math::Vector::<f64>::zeros(); n], vec![0.0; n]);
         let mut shear = vec![7.0; len];
         let mut slots = vec![WallContactForce::none(); len];
-        let mut loads = vec![WallLoad { force: [3.0, 3.0], contacts: 9 }; ws.len()];
+        let mut loads = vec![WallLoad { force: lbdem_kernels::math::vector(3.0, 3.0), contacts: 9 }; ws.len()];
         add_wall_contact_forces(&model(0.5), &ps, &ws, &mut shear, 1e-5, &mut f, &mut t, &mut slots)
             .expect("valid input");
         wall_loads(&slots, &mut loads).expect("valid input");
@@ -305,7 +313,7 @@ proptest! {
         for w in 0..ws.len() {
             prop_assert_eq!(loads[w].contacts, touching[w]);
             if !ws[w].active {
-                prop_assert_eq!(loads[w].force, [0.0, 0.0]);
+                prop_assert_eq!(loads[w].force, V::zeros());
             }
         }
         let total: [f64; 2] = f.iter().fold([0.0; 2], |s, v| [s[0] + v[0], s[1] + v[1]]);
@@ -329,15 +337,15 @@ proptest! {
         p.angular_velocity = 0.0;
         let normal = [angle.cos(), angle.sin()];
         // The wall surface cuts the particle `depth` deep along −normal.
-        let probe = Wall { point: p.position, normal };
+        let probe = Wall { point: p.position, normal: lbdem_kernels::math::Vector::from(normal) };
         let h = lbdem_kernels::dem::contact::placed_wall(&p.placed(), &probe).overlap;
         let point = [
             p.position[0] - normal[0] * (h - depth),
             p.position[1] - normal[1] * (h - depth),
         ];
-        let wall = WallBody { wall: Wall { point, normal }, velocity: p.velocity, active: true };
+        let wall = WallBody { wall: Wall { point: lbdem_kernels::math::Vector::from(point), normal: lbdem_kernels::math::Vector::from(normal) }, velocity: p.velocity, active: true };
         let c = wall_contact(&p, &wall.wall).expect("the wall cuts the particle");
-        let (mut f, mut t) = (vec![[0.0; 2]; 1], vec![0.0; 1]);
+        let (mut f, mut t) = (vec![lbdem_kernels::math::Vector::<f64>::zeros(); 1], vec![0.0; 1]);
         let (mut shear, mut slots) = (vec![0.0; 1], vec![WallContactForce::none(); 1]);
         add_wall_contact_forces(&model(0.3), &[p], &[wall], &mut shear, 1e-4, &mut f, &mut t, &mut slots)
             .expect("valid input");
@@ -360,15 +368,15 @@ proptest! {
         alpha in 0.0f64..0.8,
     ) {
         let n = ps.len();
-        let f: Vec<[f64; 2]> = loads[..n].iter().map(|l| l.0).collect();
+        let f: Vec<V> = loads[..n].iter().map(|l| V::from(l.0)).collect();
         let t: Vec<f64> = loads[..n].iter().map(|l| l.1).collect();
         let held: Vec<bool> = loads[..n].iter().map(|l| l.2).collect();
         let (g, dt) = ([0.0, -9.81], 1e-4);
         let mut all = ps.clone();
-        integrate_all(&mut all, &f, &t, &held, g, alpha, dt).expect("valid input");
+        integrate_all(&mut all, &f, &t, &held, lbdem_kernels::math::Vector::from(g), alpha, dt).expect("valid input");
         for (k, mut p) in ps.into_iter().enumerate() {
             if !held[k] {
-                central_difference_step(&mut p, f[k], t[k], g, alpha, dt);
+                central_difference_step(&mut p, lbdem_kernels::math::Vector::from(f[k]), t[k], lbdem_kernels::math::Vector::from(g), alpha, dt);
             }
             prop_assert_eq!(p, all[k]);
         }
@@ -402,7 +410,7 @@ proptest! {
 
         // Unsplit.
         let run = |sizes: Option<[usize; 4]>| {
-            let (mut f, mut t) = (vec![[0.0; 2]; n], vec![0.0; n]);
+            let (mut f, mut t) = (vec![lbdem_kernels::math::Vector::<f64>::zeros(); n], vec![0.0; n]);
             let mut shear = history.clone();
             let mut slots = vec![ContactForce::zero(); pairs.len()];
             let ranges = |len: usize, k: usize| match sizes {
@@ -431,7 +439,7 @@ proptest! {
             wall_loads(&wslots, &mut loads).unwrap();
             let mut moved_ps = ps.clone();
             for r in ranges(n, 3) {
-                integrate_all(&mut moved_ps[r.clone()], &f[r.clone()], &t[r.clone()], &held[r], [0.0, -9.81], 0.7, dt).unwrap();
+                integrate_all(&mut moved_ps[r.clone()], &f[r.clone()], &t[r.clone()], &held[r], lbdem_kernels::math::vector(0.0, -9.81), 0.7, dt).unwrap();
             }
             (slots, shear, sums, bonds, bslots, broke, wslots, wshear, loads, bits(&f, &t), moved_ps)
         };
@@ -458,9 +466,9 @@ proptest! {
 #[test]
 fn every_short_buffer_is_refused() {
     let ps = [
-        Particle::disc([0.0, 0.0], 0.1, 1.0),
-        Particle::disc([0.15, 0.0], 0.1, 1.0),
-        Particle::disc([0.3, 0.0], 0.1, 1.0),
+        Particle::disc(lbdem_kernels::math::vector(0.0, 0.0), 0.1, 1.0),
+        Particle::disc(lbdem_kernels::math::vector(0.15, 0.0), 0.1, 1.0),
+        Particle::disc(lbdem_kernels::math::vector(0.3, 0.0), 0.1, 1.0),
     ];
     let pairs = [[0, 1], [1, 2]];
     let m = model(0.5);
@@ -492,11 +500,15 @@ fn every_short_buffer_is_refused() {
     let mut slots = vec![ContactForce::zero(); 2];
     pair_contacts(&m, &ps, &pairs, &mut [0.0; 2], dt, &mut slots).unwrap();
     let sum = |contacts: usize, force: usize, torque: usize| {
-        let (mut f, mut t) = (vec![[0.0; 2]; force], vec![0.0; torque]);
+        let (mut f, mut t) = (
+            vec![lbdem_kernels::math::Vector::<f64>::zeros(); force],
+            vec![0.0; torque],
+        );
         let r = add_pair_forces(&pairs, &slots[..contacts], &mut f, &mut t);
         (
             r.map(|s| s.active),
-            f.iter().all(|v| *v == [0.0; 2]) && t.iter().all(|v| *v == 0.0),
+            f.iter().all(|v| *v == lbdem_kernels::math::Vector::zeros())
+                && t.iter().all(|v| *v == 0.0),
         )
     };
     for (c, f, t) in [(1, 3, 3), (2, 2, 3), (2, 3, 2)] {
@@ -509,7 +521,12 @@ fn every_short_buffer_is_refused() {
     assert_eq!(sum(2, 3, 3).0, Ok(2));
     assert_eq!(sum(2, 4, 4).0, Ok(2));
     assert_eq!(
-        add_pair_forces(&[[1, 1]], &slots, &mut [[0.0; 2]; 3], &mut [0.0; 3]),
+        add_pair_forces(
+            &[[1, 1]],
+            &slots,
+            &mut [lbdem_kernels::math::Vector::<f64>::zeros(); 3],
+            &mut [0.0; 3]
+        ),
         Err(AssemblyError::BadPair)
     );
 
@@ -542,29 +559,45 @@ fn every_short_buffer_is_refused() {
     let mut bslots = [BondForce::zero(); 2];
     assert_eq!(bond_forces(&ps, &mut b, dt, &mut bslots), Ok(()));
     assert_eq!(b, bonds, "unstretched bonds keep their state");
-    let mut f = vec![[0.0; 2]; 2];
+    let mut f = vec![lbdem_kernels::math::Vector::<f64>::zeros(); 2];
     assert_eq!(
         add_bond_forces(&bonds, &bslots, &mut f, &mut [0.0; 3]),
         Err(AssemblyError::BufferLength)
     );
     assert_eq!(
-        add_bond_forces(&bonds, &bslots[..1], &mut [[0.0; 2]; 3], &mut [0.0; 3]),
+        add_bond_forces(
+            &bonds,
+            &bslots[..1],
+            &mut [lbdem_kernels::math::Vector::<f64>::zeros(); 3],
+            &mut [0.0; 3]
+        ),
         Err(AssemblyError::BufferLength)
     );
     assert_eq!(
-        add_bond_forces(&bonds, &bslots, &mut [[0.0; 2]; 3], &mut [0.0; 3]),
+        add_bond_forces(
+            &bonds,
+            &bslots,
+            &mut [lbdem_kernels::math::Vector::<f64>::zeros(); 3],
+            &mut [0.0; 3]
+        ),
         Ok(0)
     );
 
     // Walls.
     let walls = [
-        WallBody::fixed(Wall::from_angle([0.0, -0.05], std::f64::consts::FRAC_PI_2)),
-        WallBody::fixed(Wall::from_angle([-0.05, 0.0], 0.0)),
+        WallBody::fixed(Wall::from_angle(
+            lbdem_kernels::math::vector(0.0, -0.05),
+            std::f64::consts::FRAC_PI_2,
+        )),
+        WallBody::fixed(Wall::from_angle(
+            lbdem_kernels::math::vector(-0.05, 0.0),
+            0.0,
+        )),
     ];
     let wall = |shear: usize, force: usize, torque: usize, out: usize| {
         let (mut s, mut f, mut t, mut o) = (
             vec![0.0; shear],
-            vec![[0.0; 2]; force],
+            vec![lbdem_kernels::math::Vector::<f64>::zeros(); force],
             vec![0.0; torque],
             vec![WallContactForce::none(); out],
         );
@@ -573,7 +606,8 @@ fn every_short_buffer_is_refused() {
         let counted = r.and_then(|()| wall_loads(&o[..6], &mut loads));
         (
             counted.map(|()| loads[0].contacts + loads[1].contacts),
-            f.iter().all(|v| *v == [0.0; 2]) && o.iter().all(|v| !v.touching),
+            f.iter().all(|v| *v == lbdem_kernels::math::Vector::zeros())
+                && o.iter().all(|v| !v.touching),
         )
     };
     for (s, f, t, o) in [(5, 3, 3, 6), (6, 2, 3, 6), (6, 3, 2, 6), (6, 3, 3, 5)] {
@@ -600,22 +634,54 @@ fn every_short_buffer_is_refused() {
 
     // Integration.
     let mut moved = ps;
-    let (f, t, held) = ([[1.0, 0.0]; 3], [0.5; 3], [false; 3]);
+    let (f, t, held) = ([V::new(1.0, 0.0); 3], [0.5; 3], [false; 3]);
     assert_eq!(
-        integrate_all(&mut moved, &f[..2], &t, &held, [0.0; 2], 0.0, dt),
+        integrate_all(
+            &mut moved,
+            &f[..2],
+            &t,
+            &held,
+            lbdem_kernels::math::Vector::zeros(),
+            0.0,
+            dt
+        ),
         Err(AssemblyError::BufferLength)
     );
     assert_eq!(
-        integrate_all(&mut moved, &f, &t[..2], &held, [0.0; 2], 0.0, dt),
+        integrate_all(
+            &mut moved,
+            &f,
+            &t[..2],
+            &held,
+            lbdem_kernels::math::Vector::zeros(),
+            0.0,
+            dt
+        ),
         Err(AssemblyError::BufferLength)
     );
     assert_eq!(
-        integrate_all(&mut moved, &f, &t, &held[..2], [0.0; 2], 0.0, dt),
+        integrate_all(
+            &mut moved,
+            &f,
+            &t,
+            &held[..2],
+            lbdem_kernels::math::Vector::zeros(),
+            0.0,
+            dt
+        ),
         Err(AssemblyError::BufferLength)
     );
     assert_eq!(moved, ps, "nothing moved on error");
     assert_eq!(
-        integrate_all(&mut moved, &f, &t, &held, [0.0; 2], 0.0, dt),
+        integrate_all(
+            &mut moved,
+            &f,
+            &t,
+            &held,
+            lbdem_kernels::math::Vector::zeros(),
+            0.0,
+            dt
+        ),
         Ok(())
     );
     assert_ne!(moved, ps);
@@ -634,10 +700,10 @@ fn bonded_critical_step_adds_the_bond_stiffness() {
         no_tension: true,
     };
     let ps = [
-        Particle::disc([0.0, 0.0], 0.1, 2.0),
-        Particle::disc([0.2, 0.0], 0.1, 2.0),
+        Particle::disc(lbdem_kernels::math::vector(0.0, 0.0), 0.1, 2.0),
+        Particle::disc(lbdem_kernels::math::vector(0.2, 0.0), 0.1, 2.0),
         // The largest body: its own step is the longest, so the two small discs (bonded below) set the step.
-        Particle::ellipse([0.8, 0.0], 0.4, 0.3, 0.2, 2.0),
+        Particle::ellipse(lbdem_kernels::math::vector(0.8, 0.0), 0.4, 0.3, 0.2, 2.0),
     ];
     let (mut kt, mut kr) = ([0.0; 3], [0.0; 3]);
     let alone = m

@@ -44,7 +44,12 @@ struct E {
 
 impl E {
     fn placed(&self) -> Placed<f64> {
-        Placed::new(self.c, self.phi, self.a, self.b)
+        Placed::new(
+            lbdem_kernels::math::Vector::from(self.c),
+            self.phi,
+            self.a,
+            self.b,
+        )
     }
     /// Support function h(n) = max_{x ∈ E} n·(x − c).
     fn support(&self, n: [f64; 2]) -> f64 {
@@ -126,8 +131,8 @@ fn disc_pairs_from_every_direction_are_exact() {
         let dist = ri + rj + [-0.2, -0.01, 0.0, 0.05, 0.8][k % 5];
         let cj = [0.3 + dist * dir.cos(), -0.1 + dist * dir.sin()];
         let c = ellipse_ellipse(
-            &Placed::new([0.3, -0.1], 0.0, ri, ri),
-            &Placed::new(cj, 1.1, rj, rj),
+            &Placed::new(lbdem_kernels::math::vector(0.3, -0.1), 0.0, ri, ri),
+            &Placed::new(lbdem_kernels::math::Vector::from(cj), 1.1, rj, rj),
         );
         let want = [dir.cos(), dir.sin()];
         assert!(
@@ -160,8 +165,8 @@ proptest! {
         let xi = origin;
         let n = [dir.cos(), dir.sin()];
         let xj = [xi[0] + dist * n[0], xi[1] + dist * n[1]];
-        let bi = BodyState { position: xi, velocity: vi, angular_velocity: wi };
-        let bj = BodyState { position: xj, velocity: vj, angular_velocity: wj };
+        let bi = BodyState { position: lbdem_kernels::math::Vector::from(xi), velocity: lbdem_kernels::math::Vector::from(vi), angular_velocity: wi };
+        let bj = BodyState { position: lbdem_kernels::math::Vector::from(xj), velocity: lbdem_kernels::math::Vector::from(vj), angular_velocity: wj };
         let f = parallel_bond_force(&mut bond, &bi, ri, &bj, rj, dt);
         // The midpoint of the gap between the two surfaces along the centre line.
         let surface_i = [xi[0] + ri * n[0], xi[1] + ri * n[1]];
@@ -183,10 +188,10 @@ proptest! {
         let want_j = [want_n * n[0] + want_s * t[0], want_n * n[1] + want_s * t[1]];
         let scale = kn * area * dt * 8.0;
         prop_assert!((f.force_on_j[0] - want_j[0]).abs() <= tol(scale) && (f.force_on_j[1] - want_j[1]).abs() <= tol(scale));
-        prop_assert_eq!(f.force_on_i, [-f.force_on_j[0], -f.force_on_j[1]]);
+        prop_assert_eq!(f.force_on_i, -f.force_on_j);
         // Moment balance about the origin: τ_i + τ_j + x_i × F_i + x_j × F_j = 0 (the bond is internal).
         let cross = |a: [f64; 2], b: [f64; 2]| a[0] * b[1] - a[1] * b[0];
-        let m = f.torque_on_i + f.torque_on_j + cross(xi, f.force_on_i) + cross(xj, f.force_on_j);
+        let m = f.torque_on_i + f.torque_on_j + cross(xi, f.force_on_i.into()) + cross(xj, f.force_on_j.into());
         prop_assert!(m.abs() <= tol(scale * 8.0), "moment residual {m:e}");
     }
 
@@ -195,8 +200,8 @@ proptest! {
     fn kinetic_energy_is_half_m_v_squared_plus_half_i_omega_squared(
         v in [-3.0f64..3.0, -3.0f64..3.0], w in -10.0f64..10.0, r in 0.05f64..1.0, disc in any::<bool>(),
     ) {
-        let mut p = if disc { Particle::disc([0.0, 0.0], r, 2.0) } else { Particle::ellipse([0.0, 0.0], 0.4, r, 0.5 * r, 2.0) };
-        p.velocity = v;
+        let mut p = if disc { Particle::disc(lbdem_kernels::math::vector(0.0, 0.0), r, 2.0) } else { Particle::ellipse(lbdem_kernels::math::vector(0.0, 0.0), 0.4, r, 0.5 * r, 2.0) };
+        p.velocity = lbdem_kernels::math::Vector::from(v);
         p.angular_velocity = w;
         let want = 0.5 * p.mass * (v[0] * v[0] + v[1] * v[1]) + 0.5 * p.moment_of_inertia * w * w;
         prop_assert!((kinetic_energy(&p) - want).abs() <= 8.0 * f64::EPSILON * want, "{} vs {want}", kinetic_energy(&p));
@@ -225,12 +230,12 @@ proptest! {
         let p = e.placed();
         let at = |t: f64| e.support([t.cos(), t.sin()]);
         let n = [theta.cos(), theta.sin()];
-        let (h, dh, rho) = p.support_derivatives(n);
+        let (h, dh, rho) = p.support_derivatives(lbdem_kernels::math::Vector::from(n));
         let step = 1e-4;
         let d1 = (at(theta + step) - at(theta - step)) / (2.0 * step);
         let d2 = (at(theta + step) - 2.0 * at(theta) + at(theta - step)) / (step * step);
         prop_assert!((h - at(theta)).abs() <= 1e-13 * a, "h {h} vs {}", at(theta));
-        prop_assert!((p.support_value(n) - h).abs() <= 1e-13 * a);
+        prop_assert!((p.support_value(lbdem_kernels::math::Vector::from(n)) - h).abs() <= 1e-13 * a);
         prop_assert!((dh - d1).abs() <= 1e-5 * a, "h' {dh} vs {d1}");
         prop_assert!((rho - (h + d2)).abs() <= 1e-5 * a / aspect.powi(3), "ρ {rho} vs {}", h + d2);
     }
@@ -250,7 +255,7 @@ proptest! {
         for q in pts {
             let x = [c[0] + q[0], c[1] + q[1]];
             if grown.contains(x) == shrunk.contains(x) {
-                prop_assert_eq!(e.placed().contains(x), o.contains(x), "point {:?}", x);
+                prop_assert_eq!(e.placed().contains(lbdem_kernels::math::Vector::from(x)), o.contains(x), "point {:?}", x);
                 compared += 1;
             }
         }
@@ -268,21 +273,21 @@ proptest! {
         p in [-5.0f64..5.0, -5.0f64..5.0], angle in -PI..PI, x in [-5.0f64..5.0, -5.0f64..5.0],
         e in [-3.0f64..3.0, -3.0f64..3.0],
     ) {
-        let wall = Wall::from_angle(p, angle);
-        let f = wall.project(x);
-        let s = wall.signed_distance(x);
+        let wall = Wall::from_angle(lbdem_kernels::math::Vector::from(p), angle);
+        let f = wall.project(lbdem_kernels::math::Vector::from(x));
+        let s = wall.signed_distance(lbdem_kernels::math::Vector::from(x));
         prop_assert!(wall.signed_distance(f).abs() <= 1e-14, "foot {f:?} off the wall");
         for k in 0..2 {
             prop_assert!((f[k] + s * wall.normal[k] - x[k]).abs() <= 1e-14, "axis {k}");
         }
-        let seg = WallSegment { start: p, end: [p[0] + e[0], p[1] + e[1]] };
+        let seg = WallSegment { start: lbdem_kernels::math::Vector::from(p), end: lbdem_kernels::math::vector(p[0] + e[0], p[1] + e[1]) };
         let (w, length) = seg.wall();
         // The segment as stored (end − start carries the rounding of start + e).
         let e = [seg.end[0] - p[0], seg.end[1] - p[1]];
         let len = e[0].hypot(e[1]);
         prop_assume!(len > 1e-3);
         prop_assert!((length - len).abs() <= 4.0 * f64::EPSILON * len, "length {length} vs {len}");
-        prop_assert_eq!(w.point, p);
+        prop_assert_eq!(w.point, lbdem_kernels::math::Vector::from(p));
         prop_assert!((w.normal[0] + e[1] / len).abs() <= 1e-15 && (w.normal[1] - e[0] / len).abs() <= 1e-15, "normal {:?}", w.normal);
         prop_assert!((seg.abscissa(seg.end) - len).abs() <= 1e-13 && seg.abscissa(seg.start).abs() <= 1e-15, "abscissae {} {}", seg.abscissa(seg.start), seg.abscissa(seg.end));
     }
@@ -292,9 +297,16 @@ proptest! {
 #[test]
 fn zero_length_segment_has_the_documented_wall() {
     let seg = WallSegment {
-        start: [1.5, -2.0],
-        end: [1.5, -2.0],
+        start: lbdem_kernels::math::vector(1.5, -2.0),
+        end: lbdem_kernels::math::vector(1.5, -2.0),
     };
     let (w, length) = seg.wall();
-    assert_eq!((w.normal, length, w.point), ([0.0, 1.0], 0.0, [1.5, -2.0]));
+    assert_eq!(
+        (w.normal, length, w.point),
+        (
+            lbdem_kernels::math::vector(0.0, 1.0),
+            0.0,
+            lbdem_kernels::math::vector(1.5, -2.0)
+        )
+    );
 }

@@ -14,7 +14,7 @@ use lbdem_kernels::dem::grid::{
 };
 use lbdem_kernels::dem::law::{linear_contact_force, BodyState, ContactLaw};
 use lbdem_kernels::dem::shape::{Particle, Placed, Wall};
-use lbdem_kernels::dem::vector::{cross, sub};
+use lbdem_kernels::math::{cross, Vector};
 use lbdem_reference::dem as oracle;
 use proptest::prelude::*;
 
@@ -63,7 +63,12 @@ fn ellipse_pair() -> impl Strategy<Value = (oracle::Ellipse, oracle::Ellipse)> {
 }
 
 fn placed(e: &oracle::Ellipse) -> Placed<f64> {
-    Placed::new(e.centre, e.angle, e.a, e.b)
+    Placed::new(
+        lbdem_kernels::math::Vector::from(e.centre),
+        e.angle,
+        e.a,
+        e.b,
+    )
 }
 
 proptest! {
@@ -86,7 +91,7 @@ proptest! {
         for (p, e) in [(c.point_i, &e1), (c.point_j, &e2)] {
             let grown = oracle::Ellipse { a: e.a * (1.0 + 1e-9), b: e.b * (1.0 + 1e-9), ..*e };
             let shrunk = oracle::Ellipse { a: e.a * (1.0 - 1e-9), b: e.b * (1.0 - 1e-9), ..*e };
-            prop_assert!(grown.contains(p) && !shrunk.contains(p));
+            prop_assert!(grown.contains(p.into()) && !shrunk.contains(p.into()));
         }
         prop_assert!((c.normal[0].hypot(c.normal[1]) - 1.0).abs() < 1e-12);
     }
@@ -104,7 +109,7 @@ proptest! {
             prop_assert!((c12.normal[1] + c21.normal[1]).abs() < 1e-6);
         }
         let p32 = |e: &oracle::Ellipse| Placed::<f32>::new(
-            [e.centre[0] as f32, e.centre[1] as f32], e.angle as f32, e.a as f32, e.b as f32);
+            lbdem_kernels::math::vector(e.centre[0] as f32, e.centre[1] as f32), e.angle as f32, e.a as f32, e.b as f32);
         let c32 = ellipse_ellipse(&p32(&e1), &p32(&e2));
         // f32 inputs are rounded by ~6e-8 relative; the overlap inherits a few times that of |d| + a + b ≲ 4.
         prop_assert!((c32.overlap as f64 - c12.overlap).abs() < 5e-6, "{} vs {}", c32.overlap, c12.overlap);
@@ -118,7 +123,7 @@ proptest! {
         let e = oracle::Ellipse { centre: [0.1, 0.2], a: 1.0, b, angle };
         let normal = [wall_angle.cos(), wall_angle.sin()];
         let point = [0.1 - height * normal[0], 0.2 - height * normal[1]];
-        let c = ellipse_wall(&placed(&e), &Wall { point, normal });
+        let c = ellipse_wall(&placed(&e), &Wall { point: lbdem_kernels::math::Vector::from(point), normal: lbdem_kernels::math::Vector::from(normal) });
         let reference = oracle::ellipse_wall_overlap(&e, point, normal, ORACLE_SAMPLES);
         // Only the sagitta error a(2π/n)²/8 ≈ 1.2e-6 applies here.
         prop_assert!((c.overlap - reference).abs() < 2e-6, "{} vs {}", c.overlap, reference);
@@ -136,14 +141,14 @@ proptest! {
     ) {
         let pj_pos = [dist * phi.cos(), dist * phi.sin()];
         let (pi, pj) = match kind {
-            0 => (Particle::disc([0.0, 0.0], 0.5, 1.0), Particle::disc(pj_pos, 0.5, 1.0)),
-            1 => (Particle::ellipse([0.0, 0.0], t1, 1.0, b, 1.0), Particle::disc(pj_pos, 0.5, 1.0)),
-            _ => (Particle::ellipse([0.0, 0.0], t1, 1.0, b, 1.0), Particle::ellipse(pj_pos, t2, 0.8, 0.8 * b, 1.0)),
+            0 => (Particle::disc(lbdem_kernels::math::vector(0.0, 0.0), 0.5, 1.0), Particle::disc(lbdem_kernels::math::Vector::from(pj_pos), 0.5, 1.0)),
+            1 => (Particle::ellipse(lbdem_kernels::math::vector(0.0, 0.0), t1, 1.0, b, 1.0), Particle::disc(lbdem_kernels::math::Vector::from(pj_pos), 0.5, 1.0)),
+            _ => (Particle::ellipse(lbdem_kernels::math::vector(0.0, 0.0), t1, 1.0, b, 1.0), Particle::ellipse(lbdem_kernels::math::Vector::from(pj_pos), t2, 0.8, 0.8 * b, 1.0)),
         };
         let mut pi = pi;
         let mut pj = pj;
-        pi.velocity = [v[0], v[1]];
-        pj.velocity = [v[2], v[3]];
+        pi.velocity = lbdem_kernels::math::vector(v[0], v[1]);
+        pj.velocity = lbdem_kernels::math::vector(v[2], v[3]);
         pi.angular_velocity = w[0];
         pj.angular_velocity = w[1];
         let law = ContactLaw { normal_damping: cn, ..ContactLaw::elastic(1e3, 6e2, mu) };
@@ -152,24 +157,24 @@ proptest! {
         let mut history = shear;
         let dt = 1e-3;
         let f = linear_contact_force(&law, &c, &bi, &bj, &mut history, dt);
-        prop_assert_eq!(f.force_on_i, [-f.force_on_j[0], -f.force_on_j[1]]);
+        prop_assert_eq!(f.force_on_i, -f.force_on_j);
         // Net moment about the contact point x: τ_i + τ_j + (c_i − x) × F_i + (c_j − x) × F_j = 0.
         let m = f.torque_on_i + f.torque_on_j
-            + cross(sub(pi.position, c.point), f.force_on_i)
-            + cross(sub(pj.position, c.point), f.force_on_j);
+            + cross(&(pi.position - c.point), &f.force_on_i)
+            + cross(&(pj.position - c.point), &f.force_on_j);
         let scale = 1.0 + f.force_on_j[0].abs() + f.force_on_j[1].abs();
         prop_assert!(m.abs() <= 1e-12 * scale * 4.0, "moment residual {m}");
         prop_assert!(f.normal_force >= 0.0);
         prop_assert!(f.shear_force.abs() <= mu * f.normal_force * (1.0 + 1e-15));
         prop_assert_eq!(history, f.shear_force);
         if !c.is_active() {
-            prop_assert_eq!(f.force_on_j, [0.0, 0.0]);
+            prop_assert_eq!(f.force_on_j, Vector::zeros());
             prop_assert_eq!(f.torque_on_i, 0.0);
             prop_assert_eq!(history, 0.0);
             prop_assert!(particle_contact(&pi, &pj).is_none());
         } else {
-            let rel = sub(bj.velocity_at(c.point), bi.velocity_at(c.point));
-            let (fr, sr) = oracle::linear_contact_force(c.overlap, c.normal, rel, shear, 1e3, 6e2, mu, cn, dt);
+            let rel = bj.velocity_at(c.point) - bi.velocity_at(c.point);
+            let (fr, sr) = oracle::linear_contact_force(c.overlap, c.normal.into(), rel.into(), shear, 1e3, 6e2, mu, cn, dt);
             prop_assert!((fr[0] - f.force_on_j[0]).abs() <= 1e-12 * scale);
             prop_assert!((fr[1] - f.force_on_j[1]).abs() <= 1e-12 * scale);
             prop_assert!((sr - f.shear_force).abs() <= 1e-12 * scale);
@@ -184,16 +189,16 @@ proptest! {
         t1 in 0.0f64..6.3, t2 in 0.0f64..6.3, phi in 0.0f64..6.3, gap in -0.05f64..0.05,
         dx in prop::array::uniform2(-0.01f64..0.01), dth in prop::array::uniform2(-0.1f64..0.1),
     ) {
-        let pi = Particle::ellipse([0.0, 0.0], t1, 0.11, 0.055, 2.6);
-        let mut pj = Particle::ellipse([0.0, 0.0], t2, 0.09, 0.045, 2.6);
+        let pi = Particle::ellipse(lbdem_kernels::math::vector(0.0, 0.0), t1, 0.11, 0.055, 2.6);
+        let mut pj = Particle::ellipse(lbdem_kernels::math::vector(0.0, 0.0), t2, 0.09, 0.045, 2.6);
         // place j along phi so that its closest-approach gap is about `gap`
         let mut r = 0.0;
         for _ in 0..4 {
-            pj.position = [r * phi.cos(), r * phi.sin()];
+            pj.position = lbdem_kernels::math::vector(r * phi.cos(), r * phi.sin());
             let c = closest_approach(&pi, &pj);
             r += gap - (-c.overlap) + if r == 0.0 { 0.1 } else { 0.0 };
         }
-        pj.position = [r * phi.cos(), r * phi.sin()];
+        pj.position = lbdem_kernels::math::vector(r * phi.cos(), r * phi.sin());
         let mut bond = PointBond::between(&pi, &pj, 1e5, f64::INFINITY);
         let unloaded = point_bond_force(&mut bond, &pi, &pj);
         prop_assert!(unloaded.force_on_j.iter().all(|f| f.abs() < 1e-9), "{:?}", unloaded.force_on_j);
@@ -201,8 +206,8 @@ proptest! {
         let rot = 0.3f64;
         let rotp = |p: [f64; 2]| [rot.cos() * p[0] - rot.sin() * p[1], rot.sin() * p[0] + rot.cos() * p[1]];
         let (mut qi, mut qj) = (pi, pj);
-        qi.position = rotp(pi.position);
-        qj.position = rotp(pj.position);
+        qi.position = lbdem_kernels::math::Vector::from(rotp(pi.position.into()));
+        qj.position = lbdem_kernels::math::Vector::from(rotp(pj.position.into()));
         qi.angle += rot;
         qj.angle += rot;
         let rigid = point_bond_force(&mut bond, &qi, &qj);
@@ -216,11 +221,11 @@ proptest! {
         mi.angle += dth[1];
         let f = point_bond_force(&mut bond, &mi, &mj);
         prop_assert!(f.broke.is_none());
-        prop_assert_eq!(f.force_on_i, [-f.force_on_j[0], -f.force_on_j[1]]);
+        prop_assert_eq!(f.force_on_i, -f.force_on_j);
         let (a, b) = bond.material_points(&mi, &mj);
-        let x = [(a[0] + b[0]) / 2.0, (a[1] + b[1]) / 2.0];
+        let x = Vector::new((a[0] + b[0]) / 2.0, (a[1] + b[1]) / 2.0);
         let m = f.torque_on_i + f.torque_on_j
-            + cross(sub(mi.position, x), f.force_on_i) + cross(sub(mj.position, x), f.force_on_j);
+            + cross(&(mi.position - x), &f.force_on_i) + cross(&(mj.position - x), &f.force_on_j);
         prop_assert!(m.abs() < 1e-9, "moment residual {m}");
         // The same |F| the kernel compares with the strength (libm's hypot, the same bits in every build).
         let magnitude = lbdem_kernels::Real::portable_hypot(f.force_on_j[0], f.force_on_j[1]);
@@ -235,10 +240,10 @@ proptest! {
         let broke = point_bond_force(&mut at, &mi, &mj);
         let record = broke.broke.expect("breaks at |F| = F_crit");
         prop_assert_eq!(record.load, magnitude);
-        prop_assert_eq!(broke.force_on_j, [0.0, 0.0]);
+        prop_assert_eq!(broke.force_on_j, Vector::zeros());
         prop_assert!(!at.intact);
         let after = point_bond_force(&mut at, &pi, &pj);
-        prop_assert!(after.broke.is_none() && after.force_on_j == [0.0, 0.0] && after.torque_on_j == 0.0);
+        prop_assert!(after.broke.is_none() && after.force_on_j == lbdem_kernels::math::vector(0.0, 0.0) && after.torque_on_j == 0.0);
     }
 
     /// Parallel bond: equal and opposite forces, moments balanced about the bond point, stresses from the
@@ -250,18 +255,18 @@ proptest! {
     ) {
         let mut bond = ParallelBond::new(0.1, 0.08, 1.0, 1e6, 4e5, f64::INFINITY, f64::INFINITY);
         let d = 0.18;
-        let bi = BodyState { position: [0.0, 0.0], velocity: [v[0], v[1]], angular_velocity: w[0] };
-        let bj = BodyState { position: [d * phi.cos(), d * phi.sin()], velocity: [v[2], v[3]], angular_velocity: w[1] };
+        let bi = BodyState { position: lbdem_kernels::math::vector(0.0, 0.0), velocity: lbdem_kernels::math::vector(v[0], v[1]), angular_velocity: w[0] };
+        let bj = BodyState { position: lbdem_kernels::math::vector(d * phi.cos(), d * phi.sin()), velocity: lbdem_kernels::math::vector(v[2], v[3]), angular_velocity: w[1] };
         let mut f = parallel_bond_force(&mut bond, &bi, 0.1, &bj, 0.08, 1e-4);
         for _ in 1..steps {
             f = parallel_bond_force(&mut bond, &bi, 0.1, &bj, 0.08, 1e-4);
         }
         prop_assert!(f.broke.is_none());
-        prop_assert_eq!(f.force_on_i, [-f.force_on_j[0], -f.force_on_j[1]]);
+        prop_assert_eq!(f.force_on_i, -f.force_on_j);
         let n = [phi.cos(), phi.sin()];
-        let x = [0.1 * n[0], 0.1 * n[1]];
+        let x = Vector::new(0.1 * n[0], 0.1 * n[1]);
         let m = f.torque_on_i + f.torque_on_j
-            + cross(sub(bi.position, x), f.force_on_i) + cross(sub(bj.position, x), f.force_on_j);
+            + cross(&(bi.position - x), &f.force_on_i) + cross(&(bj.position - x), &f.force_on_j);
         prop_assert!(m.abs() < 1e-9, "moment residual {m}");
         // R̄ = 0.08, A = 0.16, I = 2·0.08³/3
         prop_assert!((bond.area() - 0.16).abs() < 1e-15);
@@ -274,10 +279,10 @@ proptest! {
     fn broad_phase_matches_all_pairs(
         pts in prop::collection::vec((0.0f64..5.0, 0.0f64..3.0, 0.05f64..0.25), 0..60),
     ) {
-        let positions: Vec<[f64; 2]> = pts.iter().map(|p| [p.0, p.1]).collect();
+        let positions: Vec<Vector<f64>> = pts.iter().map(|p| Vector::new(p.0, p.1)).collect();
         let radii: Vec<f64> = pts.iter().map(|p| p.2).collect();
         let margin = 0.01;
-        let grid = CellGrid::covering([0.0, 0.0], [5.0, 3.0], 2.0 * 0.25 + margin, 64).unwrap();
+        let grid = CellGrid::covering(lbdem_kernels::math::vector(0.0, 0.0), lbdem_kernels::math::vector(5.0, 3.0), 2.0 * 0.25 + margin, 64).unwrap();
         let (start_len, order_len) = cell_grid_scratch_len(&grid, positions.len());
         let mut start = vec![0; start_len];
         let mut order = vec![0; order_len];
@@ -293,7 +298,7 @@ proptest! {
         let mut expected = Vec::new();
         for i in 0..positions.len() {
             for j in i + 1..positions.len() {
-                let d = sub(positions[j], positions[i]);
+                let d = positions[j] - positions[i];
                 let reach = radii[i] + radii[j] + margin;
                 if d[0] * d[0] + d[1] * d[1] < reach * reach {
                     expected.push([i, j]);
@@ -355,8 +360,8 @@ fn finite(c: &Contact<f64>) -> bool {
 fn no_nan_for_coincident_centres() {
     for k in 0..16 {
         let t = k as f64 * 0.4;
-        let a = Placed::new([1.0, 2.0], t, 1.0, 0.5);
-        let b = Placed::new([1.0, 2.0], -t, 0.7, 0.35);
+        let a = Placed::new(lbdem_kernels::math::vector(1.0, 2.0), t, 1.0, 0.5);
+        let b = Placed::new(lbdem_kernels::math::vector(1.0, 2.0), -t, 0.7, 0.35);
         let c = ellipse_ellipse(&a, &b);
         assert!(finite(&c));
         // With coincident centres the least translation is along the smaller total support: at least the sum
@@ -366,27 +371,35 @@ fn no_nan_for_coincident_centres() {
             "{}",
             c.overlap
         );
-        let d = ellipse_disc(&a, [1.0, 2.0], 0.3);
+        let d = ellipse_disc(&a, lbdem_kernels::math::vector(1.0, 2.0), 0.3);
         assert!(
             finite(&d) && (d.overlap - 0.8).abs() < 1e-12,
             "{}",
             d.overlap
         );
         // Coaxial equal ellipses: exactly 2b.
-        let e = ellipse_ellipse(&a, &Placed::new([1.0, 2.0], t, 1.0, 0.5));
+        let e = ellipse_ellipse(
+            &a,
+            &Placed::new(lbdem_kernels::math::vector(1.0, 2.0), t, 1.0, 0.5),
+        );
         assert!((e.overlap - 1.0).abs() < 1e-12, "{}", e.overlap);
     }
-    let c = disc_disc([0.0, 0.0], 1.0, [0.0, 0.0], 0.5);
-    assert!(finite(&c) && c.overlap == 1.5 && c.normal == [1.0, 0.0]);
+    let c = disc_disc(
+        lbdem_kernels::math::vector(0.0, 0.0),
+        1.0,
+        lbdem_kernels::math::vector(0.0, 0.0),
+        0.5,
+    );
+    assert!(finite(&c) && c.overlap == 1.5 && c.normal == lbdem_kernels::math::vector(1.0, 0.0));
     let e = ellipse_ellipse(
-        &Placed::new([0.0; 2], 0.0, 0.5, 0.5),
-        &Placed::new([0.0; 2], 0.0, 0.5, 0.5),
+        &Placed::new(lbdem_kernels::math::Vector::zeros(), 0.0, 0.5, 0.5),
+        &Placed::new(lbdem_kernels::math::Vector::zeros(), 0.0, 0.5, 0.5),
     );
     assert!(finite(&e) && (e.overlap - 1.0).abs() < 1e-15);
     // The force law stays finite too.
     let law = ContactLaw::elastic(1e5, 6e5, 0.5);
     let mut s = 0.0;
-    let p = BodyState::fixed([0.0, 0.0]);
+    let p = BodyState::fixed(lbdem_kernels::math::vector(0.0, 0.0));
     let f = linear_contact_force(&law, &c, &p, &p, &mut s, 1e-5);
     assert!(f.force_on_j.iter().all(|x| x.is_finite()) && f.force_on_j[0] > 0.0);
 }
@@ -395,9 +408,9 @@ fn no_nan_for_coincident_centres() {
 fn touching_exactly_gives_no_force() {
     let law = ContactLaw::elastic(1e5, 6e5, 0.5);
     // Discs at exactly r1 + r2 (representable: 0.5 + 0.25 = 0.75).
-    let pi = Particle::disc([0.0, 0.0], 0.5, 1.0);
-    let mut pj = Particle::disc([0.75, 0.0], 0.25, 1.0);
-    pj.velocity = [-1.0, 3.0];
+    let pi = Particle::disc(lbdem_kernels::math::vector(0.0, 0.0), 0.5, 1.0);
+    let mut pj = Particle::disc(lbdem_kernels::math::vector(0.75, 0.0), 0.25, 1.0);
+    pj.velocity = lbdem_kernels::math::vector(-1.0, 3.0);
     let c = closest_approach(&pi, &pj);
     assert_eq!(c.overlap, 0.0);
     assert!(!c.is_active() && particle_contact(&pi, &pj).is_none());
@@ -410,20 +423,20 @@ fn touching_exactly_gives_no_force() {
         &mut shear,
         1e-5,
     );
-    assert_eq!(f.force_on_j, [0.0, 0.0]);
+    assert_eq!(f.force_on_j, lbdem_kernels::math::vector(0.0, 0.0));
     assert_eq!(shear, 0.0, "the history of an ended contact is dropped");
     // An ellipse resting exactly on a wall: overlap 0 up to rounding, finite.
-    let e = Placed::new([0.0, 0.5], 0.0, 1.0, 0.5);
+    let e = Placed::new(lbdem_kernels::math::vector(0.0, 0.5), 0.0, 1.0, 0.5);
     let w = Wall {
-        point: [0.0, 0.0],
-        normal: [0.0, 1.0],
+        point: lbdem_kernels::math::vector(0.0, 0.0),
+        normal: lbdem_kernels::math::vector(0.0, 1.0),
     };
     let c = ellipse_wall(&e, &w);
     assert!(finite(&c) && c.overlap.abs() < 1e-15);
     // Two ellipses tip to tip along x: a1 + a2 apart.
     let c = ellipse_ellipse(
-        &Placed::new([0.0, 0.0], 0.0, 1.0, 0.5),
-        &Placed::new([1.75, 0.0], 0.0, 0.75, 0.5),
+        &Placed::new(lbdem_kernels::math::vector(0.0, 0.0), 0.0, 1.0, 0.5),
+        &Placed::new(lbdem_kernels::math::vector(1.75, 0.0), 0.0, 0.75, 0.5),
     );
     assert!(finite(&c) && c.overlap.abs() < 1e-12, "{}", c.overlap);
 }
@@ -433,8 +446,8 @@ fn parallel_bond_breaks_exactly_at_strength() {
     // R̄ = 0.5 ⇒ A = 1, so σ̄ = −F̄_n exactly when M̄ = 0 and τ̄ = |F̄_s|.
     let fresh = ParallelBond::new(0.5, 0.5, 1.0, 1.0, 1.0, 10.0, 20.0);
     assert_eq!(fresh.area(), 1.0);
-    let i = BodyState::fixed([0.0, 0.0]);
-    let j = BodyState::fixed([1.0, 0.0]);
+    let i = BodyState::fixed(lbdem_kernels::math::vector(0.0, 0.0));
+    let j = BodyState::fixed(lbdem_kernels::math::vector(1.0, 0.0));
     for (fnormal, fshear, expect) in [
         (-10.0, 0.0, Some(BreakMode::Tension)),
         (-9.999999999999998, 0.0, None),
@@ -454,27 +467,29 @@ fn parallel_bond_breaks_exactly_at_strength() {
             "F_n = {fnormal}, F_s = {fshear}"
         );
         if expect.is_some() {
-            assert_eq!(f.force_on_j, [0.0, 0.0]);
+            assert_eq!(f.force_on_j, lbdem_kernels::math::vector(0.0, 0.0));
             assert!(!bond.intact);
             let r = f.broke.unwrap();
-            assert_eq!(r.position, [0.5, 0.0]);
+            assert_eq!(r.position, lbdem_kernels::math::vector(0.5, 0.0));
             assert_eq!(r.orientation, 0.0);
             let after = parallel_bond_force(
                 &mut bond,
                 &i,
                 0.5,
                 &BodyState {
-                    velocity: [5.0, 1.0],
+                    velocity: lbdem_kernels::math::vector(5.0, 1.0),
                     ..j
                 },
                 0.5,
                 1.0,
             );
             assert!(
-                after.broke.is_none() && after.force_on_j == [0.0, 0.0] && after.torque_on_j == 0.0
+                after.broke.is_none()
+                    && after.force_on_j == lbdem_kernels::math::vector(0.0, 0.0)
+                    && after.torque_on_j == 0.0
             );
         } else {
-            assert_eq!(f.force_on_j, [fnormal, fshear]);
+            assert_eq!(f.force_on_j, lbdem_kernels::math::vector(fnormal, fshear));
         }
     }
     // Bending: σ̄ = |M̄| R̄/I = |M̄|·0.5/(1/12) = 6|M̄|: breaks in tension at |M̄| = 10/6.
@@ -491,12 +506,12 @@ fn parallel_bond_breaks_exactly_at_strength() {
     // Opening the bond at speed v for a time t builds F̄_n = −k̄_n A v t.
     let mut bond = fresh;
     let opening = BodyState {
-        velocity: [2.0, 0.0],
+        velocity: lbdem_kernels::math::vector(2.0, 0.0),
         ..j
     };
     let f = parallel_bond_force(&mut bond, &i, 0.5, &opening, 0.5, 0.25);
     assert_eq!(bond.normal_force, -0.5);
-    assert_eq!(f.force_on_j, [-0.5, 0.0]);
+    assert_eq!(f.force_on_j, lbdem_kernels::math::vector(-0.5, 0.0));
 }
 
 /// No missed and no phantom contacts, at any orientation: for ellipses of aspect ratio 0.5 (ch. 6.6) at 8 × 8
@@ -581,11 +596,11 @@ fn wall_segment_is_its_half_plane_within_its_extent() {
     use lbdem_kernels::dem::shape::WallSegment;
     // A platen face from (2, 1) to (0, 1): the particles live below it (normal (0, −1)).
     let seg = WallSegment {
-        start: [2.0, 1.0],
-        end: [0.0, 1.0],
+        start: lbdem_kernels::math::vector(2.0, 1.0),
+        end: lbdem_kernels::math::vector(0.0, 1.0),
     };
     let (wall, length) = seg.wall();
-    assert_eq!(wall.normal, [0.0, -1.0]);
+    assert_eq!(wall.normal, lbdem_kernels::math::vector(0.0, -1.0));
     assert_eq!(length, 2.0);
     for (x, inside) in [
         (-0.05, false),
@@ -595,7 +610,13 @@ fn wall_segment_is_its_half_plane_within_its_extent() {
         (2.0, true),
         (2.01, false),
     ] {
-        let e = Particle::<f64>::ellipse([x, 1.0 - 0.05 + 1e-3], 0.0, 0.1, 0.05, 1.0);
+        let e = Particle::<f64>::ellipse(
+            lbdem_kernels::math::vector(x, 1.0 - 0.05 + 1e-3),
+            0.0,
+            0.1,
+            0.05,
+            1.0,
+        );
         let full = wall_contact(&e, &wall).expect("overlaps the supporting line");
         assert!((full.overlap - 1e-3).abs() < 1e-12);
         match wall_segment_contact(&e, &seg) {
@@ -607,12 +628,12 @@ fn wall_segment_is_its_half_plane_within_its_extent() {
         }
     }
     // Apart from the face: nothing, wherever along it.
-    let far = Particle::disc([1.0, 0.5], 0.1, 1.0);
+    let far = Particle::disc(lbdem_kernels::math::vector(1.0, 0.5), 0.1, 1.0);
     assert!(wall_segment_contact(&far, &seg).is_none());
     // A degenerate (zero-length) segment never panics.
     let point = WallSegment {
-        start: [0.0, 0.0],
-        end: [0.0, 0.0],
+        start: lbdem_kernels::math::vector(0.0, 0.0),
+        end: lbdem_kernels::math::vector(0.0, 0.0),
     };
     let _ = wall_segment_contact(&far, &point);
 }
@@ -630,8 +651,8 @@ proptest! {
         let ci = [0.2, -0.1];
         let cj = [0.2 + 0.19 * phi.cos(), -0.1 + 0.19 * phi.sin()];
         let rigid = |c: [f64; 2]| BodyState {
-            position: c,
-            velocity: [u[0] - omega * (c[1] - pivot[1]), u[1] + omega * (c[0] - pivot[0])],
+            position: lbdem_kernels::math::Vector::from(c),
+            velocity: lbdem_kernels::math::vector(u[0] - omega * (c[1] - pivot[1]), u[1] + omega * (c[0] - pivot[0])),
             angular_velocity: omega,
         };
         let mut bond = ParallelBond::new(0.1, 0.1, 1.0, 1e6, 4e5, 1e9, 1e9);
@@ -640,7 +661,7 @@ proptest! {
             prop_assert!(f.force_on_j.iter().all(|x| x.abs() < 1e-9) && f.torque_on_j.abs() < 1e-9);
         }
         let law = ContactLaw::elastic(1e3, 6e2, 0.5);
-        let c = disc_disc(ci, 0.1, cj, 0.1);
+        let c = disc_disc(lbdem_kernels::math::Vector::from(ci), 0.1, lbdem_kernels::math::Vector::from(cj), 0.1);
         let mut shear = 0.0;
         let f = linear_contact_force(&law, &c, &rigid(ci), &rigid(cj), &mut shear, 1e-3);
         prop_assert!(shear.abs() < 1e-12);
@@ -664,10 +685,10 @@ fn assembly_passes_refuse_bad_input_without_panicking() {
         no_tension: true,
     };
     let mut ps = [
-        Particle::disc([0.0, 0.0], 0.1, 1.0),
-        Particle::disc([0.15, 0.0], 0.1, 1.0),
+        Particle::disc(lbdem_kernels::math::vector(0.0, 0.0), 0.1, 1.0),
+        Particle::disc(lbdem_kernels::math::vector(0.15, 0.0), 0.1, 1.0),
     ];
-    let (mut f, mut t) = ([[0.0f64; 2]; 2], [0.0f64; 2]);
+    let (mut f, mut t) = ([Vector::<f64>::zeros(); 2], [0.0f64; 2]);
     let mut shear = [0.0; 1];
     let mut slots = [ContactForce::zero(); 1];
     for bad in [[0, 2], [1, 1]] {
@@ -689,11 +710,11 @@ fn assembly_passes_refuse_bad_input_without_panicking() {
         Ok((1, 1))
     );
     // Newton's third law survives the accumulation; the overlap 0.05 gives k_n δ = 5000.
-    assert_eq!(f[0], [-f[1][0], -f[1][1]]);
+    assert_eq!(f[0], lbdem_kernels::math::vector(-f[1][0], -f[1][1]));
     assert!((f[1][0] - 5000.0).abs() < 1e-9 && f[1][1] == 0.0);
     let walls = [WallBody::fixed(Wall {
-        point: [0.0, -0.05],
-        normal: [0.0, 1.0],
+        point: lbdem_kernels::math::vector(0.0, -0.05),
+        normal: lbdem_kernels::math::vector(0.0, 1.0),
     })];
     let mut on_walls = [WallContactForce::none(); 2];
     assert_eq!(
@@ -729,7 +750,15 @@ fn assembly_passes_refuse_bad_input_without_panicking() {
     // The particles push the floor down with 2 k_n δ.
     assert!((loads[0].force[1] + 2.0 * 1e5 * 0.05).abs() < 1e-9);
     assert_eq!(
-        integrate_all(&mut ps, &f[..1], &t, &[false; 2], [0.0; 2], 0.0, 1e-5),
+        integrate_all(
+            &mut ps,
+            &f[..1],
+            &t,
+            &[false; 2],
+            lbdem_kernels::math::Vector::zeros(),
+            0.0,
+            1e-5
+        ),
         Err(AssemblyError::BufferLength)
     );
 }
@@ -744,8 +773,8 @@ fn contact_model_critical_step_is_the_pfc_estimate() {
         restitution: 0.5,
         no_tension: true,
     };
-    let small = Particle::disc([0.0, 0.0], 0.07, 2.6);
-    let large = Particle::ellipse([0.0, 0.0], 0.3, 0.11, 0.055, 2.6);
+    let small = Particle::disc(lbdem_kernels::math::vector(0.0, 0.0), 0.07, 2.6);
+    let large = Particle::ellipse(lbdem_kernels::math::vector(0.0, 0.0), 0.3, 0.11, 0.055, 2.6);
     let dt = model.critical_time_step(&[large, small], 4.0);
     // k = max(k_n, k_s) = 6e5, z = 4. Disc: rotation √(I/(z k_s r²)) = √(m/(2 z k_s)), below its translation
     // √(m/(z k)). Ellipse (a = 0.11, b/a = 0.5): I = m(a² + b²)/4 = 0.3125 m a² with lever arm a, so its rotation

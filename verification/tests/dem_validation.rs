@@ -1,4 +1,4 @@
-//! Kernel-level validation of the DEM against analytical results (REFERENCE §7): binary collisions (contact
+//! Kernel-level validation of the DEM against analytical results (docs/references.md §7): binary collisions (contact
 //! duration, restitution, energy), a disc settling on a wall under gravity, stick/slip on an incline, and the
 //! stability limit of the central-difference scheme. Parameters are the dissertation's table 6.1 (cgs: cm, g,
 //! s, dyne): k_n = 1e5 dyne/cm, k_s = 6e5 dyne/cm, μ = 0.5, radius 0.1 cm; areal density 2.6 g/cm².
@@ -13,7 +13,7 @@ use lbdem_kernels::dem::law::{
     BodyState, ContactLaw,
 };
 use lbdem_kernels::dem::shape::{Particle, Wall};
-use lbdem_kernels::dem::vector::cross;
+use lbdem_kernels::math::cross;
 
 const KN: f64 = 1e5;
 const KS: f64 = 6e5;
@@ -31,10 +31,18 @@ struct Collision {
 /// Head-on collision of two equal discs approaching at relative speed 2 v0; steps until they separate.
 fn head_on(law: &ContactLaw<f64>, dt: f64, synchronous: bool) -> Collision {
     let v0 = 10.0;
-    let mut a = Particle::disc([-RADIUS - 1e-3, 0.0], RADIUS, DENSITY);
-    let mut b = Particle::disc([RADIUS + 1e-3, 0.0], RADIUS, DENSITY);
-    a.velocity = [v0, 0.0];
-    b.velocity = [-v0, 0.0];
+    let mut a = Particle::disc(
+        lbdem_kernels::math::vector(-RADIUS - 1e-3, 0.0),
+        RADIUS,
+        DENSITY,
+    );
+    let mut b = Particle::disc(
+        lbdem_kernels::math::vector(RADIUS + 1e-3, 0.0),
+        RADIUS,
+        DENSITY,
+    );
+    a.velocity = lbdem_kernels::math::vector(v0, 0.0);
+    b.velocity = lbdem_kernels::math::vector(-v0, 0.0);
     let e0 = kinetic_energy(&a) + kinetic_energy(&b);
     let state = |p: &Particle<f64>| {
         if synchronous {
@@ -55,8 +63,22 @@ fn head_on(law: &ContactLaw<f64>, dt: f64, synchronous: bool) -> Collision {
             break;
         }
         let f = linear_contact_force(law, &c, &state(&a), &state(&b), &mut shear, dt);
-        central_difference_step(&mut a, f.force_on_i, f.torque_on_i, [0.0; 2], 0.0, dt);
-        central_difference_step(&mut b, f.force_on_j, f.torque_on_j, [0.0; 2], 0.0, dt);
+        central_difference_step(
+            &mut a,
+            f.force_on_i,
+            f.torque_on_i,
+            lbdem_kernels::math::Vector::zeros(),
+            0.0,
+            dt,
+        );
+        central_difference_step(
+            &mut b,
+            f.force_on_j,
+            f.torque_on_j,
+            lbdem_kernels::math::Vector::zeros(),
+            0.0,
+            dt,
+        );
     }
     assert!(touched);
     let after = b.velocity[0] - a.velocity[0];
@@ -129,7 +151,7 @@ fn restitution_is_recovered_with_the_dashpot() {
             r.restitution,
             r.duration / tc
         );
-        // REFERENCE §7.1: within 1 % at dt ≤ t_c/50, with the dashpot fed the synchronous velocity estimate.
+        // docs/references.md §7.1: within 1 % at dt ≤ t_c/50, with the dashpot fed the synchronous velocity estimate.
         assert!(rel < 0.01, "e = {e}: measured {}", r.restitution);
         // and it converges at second order: a quarter of the step divides the error by ≈ 16 (measured 15–17).
         assert!(
@@ -181,20 +203,31 @@ fn settle_on_wall(
             }
             None => {
                 shear = 0.0;
-                ([0.0; 2], 0.0)
+                (lbdem_kernels::math::Vector::zeros(), 0.0)
             }
         };
-        central_difference_step(&mut p, f, t, gravity, alpha, dt);
+        central_difference_step(
+            &mut p,
+            f,
+            t,
+            lbdem_kernels::math::Vector::from(gravity),
+            alpha,
+            dt,
+        );
     }
     (p, last.expect("the particle reached the wall"), shear)
 }
 
 #[test]
 fn disc_settles_to_the_static_overlap() {
-    let p = Particle::disc([0.0, RADIUS + 0.01], RADIUS, DENSITY);
+    let p = Particle::disc(
+        lbdem_kernels::math::vector(0.0, RADIUS + 0.01),
+        RADIUS,
+        DENSITY,
+    );
     let wall = Wall {
-        point: [0.0, 0.0],
-        normal: [0.0, 1.0],
+        point: lbdem_kernels::math::vector(0.0, 0.0),
+        normal: lbdem_kernels::math::vector(0.0, 1.0),
     };
     let m = p.mass;
     let law = ContactLaw::elastic(KN, KS, MU).with_restitution(0.5, m);
@@ -218,10 +251,16 @@ fn ellipse_comes_to_rest_flat_on_a_wall() {
     // An ellipse of aspect ratio 0.5 (ch. 6.6) released tilted by 0.6 rad rocks down to lie on its long side.
     let a = 0.11;
     let b = 0.055;
-    let p = Particle::ellipse([0.0, a + 0.002], 0.6, a, b, DENSITY);
+    let p = Particle::ellipse(
+        lbdem_kernels::math::vector(0.0, a + 0.002),
+        0.6,
+        a,
+        b,
+        DENSITY,
+    );
     let wall = Wall {
-        point: [0.0, 0.0],
-        normal: [0.0, 1.0],
+        point: lbdem_kernels::math::vector(0.0, 0.0),
+        normal: lbdem_kernels::math::vector(0.0, 1.0),
     };
     let m = p.mass;
     let law = ContactLaw::elastic(KN, KS, MU).with_restitution(0.5, m);
@@ -244,14 +283,14 @@ fn ellipse_comes_to_rest_flat_on_a_wall() {
 /// tilted by θ; it starts in static equilibrium (overlap m g cos θ/k_n, shear history m g sin θ). Returns the
 /// displacement along the slope after `time` and the acceleration measured over the second half.
 fn incline(theta: f64, time: f64) -> (f64, f64) {
-    let mut p = Particle::disc([0.0, RADIUS], RADIUS, DENSITY);
+    let mut p = Particle::disc(lbdem_kernels::math::vector(0.0, RADIUS), RADIUS, DENSITY);
     p.moment_of_inertia = f64::INFINITY;
     let m = p.mass;
     let gravity = [G * theta.sin(), -G * theta.cos()];
     p.position[1] = RADIUS - m * G * theta.cos() / KN;
     let wall = Wall {
-        point: [0.0, 0.0],
-        normal: [0.0, 1.0],
+        point: lbdem_kernels::math::vector(0.0, 0.0),
+        normal: lbdem_kernels::math::vector(0.0, 1.0),
     };
     let law = ContactLaw::elastic(KN, KS, MU).with_restitution(0.5, m);
     let dt = contact_duration(KN, m, 0.0) / 50.0;
@@ -271,7 +310,14 @@ fn incline(theta: f64, time: f64) -> (f64, f64) {
             &mut shear,
             dt,
         );
-        central_difference_step(&mut p, f.force_on_i, f.torque_on_i, gravity, 0.0, dt);
+        central_difference_step(
+            &mut p,
+            f.force_on_i,
+            f.torque_on_i,
+            lbdem_kernels::math::Vector::from(gravity),
+            0.0,
+            dt,
+        );
         if k == steps / 2 {
             v_half = p.velocity[0];
         }
@@ -307,11 +353,18 @@ fn central_difference_stability_limit() {
     let (m, k) = (disc_mass(), KN);
     let limit = single_dof_stability_limit(m, k);
     let run = |dt: f64| {
-        let mut p = Particle::disc([1e-3, 0.0], RADIUS, DENSITY);
+        let mut p = Particle::disc(lbdem_kernels::math::vector(1e-3, 0.0), RADIUS, DENSITY);
         let mut peak: f64 = 0.0;
         for _ in 0..4000 {
             let f = [-k * p.position[0], 0.0];
-            central_difference_step(&mut p, f, 0.0, [0.0; 2], 0.0, dt);
+            central_difference_step(
+                &mut p,
+                lbdem_kernels::math::Vector::from(f),
+                0.0,
+                lbdem_kernels::math::Vector::zeros(),
+                0.0,
+                dt,
+            );
             peak = peak.max(p.position[0].abs());
         }
         peak
@@ -323,8 +376,8 @@ fn central_difference_stability_limit() {
     assert!(exceeds_critical_time_step(0.9 * limit, limit, 0.8));
     assert!(exceeds_critical_time_step(f64::NAN, limit, 1.0));
     // PFC estimate: √(m/Σk) per particle, the minimum over particles, rotation included.
-    let a = Particle::disc([0.0, 0.0], 0.1, DENSITY);
-    let b = Particle::disc([0.0, 0.0], 0.07, DENSITY);
+    let a = Particle::disc(lbdem_kernels::math::vector(0.0, 0.0), 0.1, DENSITY);
+    let b = Particle::disc(lbdem_kernels::math::vector(0.0, 0.0), 0.07, DENSITY);
     let kt = [2.0 * KN, 3.0 * KN];
     let kr = [2.0 * KS * 0.01, 3.0 * KS * 0.0049];
     let dt = critical_time_step(&[a, b], &kt, &kr);
@@ -346,8 +399,12 @@ fn central_difference_stability_limit() {
 #[test]
 fn resting_pair_contacts_are_found_and_dropped() {
     // A lightweight check that particle_contact and the law agree on the life of a contact.
-    let a = Particle::disc([0.0, 0.0], RADIUS, DENSITY);
-    let mut b = Particle::disc([2.0 * RADIUS - 1e-4, 0.0], RADIUS, DENSITY);
+    let a = Particle::disc(lbdem_kernels::math::vector(0.0, 0.0), RADIUS, DENSITY);
+    let mut b = Particle::disc(
+        lbdem_kernels::math::vector(2.0 * RADIUS - 1e-4, 0.0),
+        RADIUS,
+        DENSITY,
+    );
     assert!(particle_contact(&a, &b).is_some());
     b.position[0] += 2e-4;
     assert!(particle_contact(&a, &b).is_none());
@@ -378,20 +435,19 @@ fn pour(use_assembly: bool) -> (Vec<Particle<f64>>, [f64; 2]) {
         build_cell_grid, candidate_pairs, carry_contact_history, CellGrid,
     };
     use lbdem_kernels::dem::law::ContactForce;
-    use lbdem_kernels::dem::vector::add;
     let width = 1.0;
     let walls = [
         Wall {
-            point: [0.0, 0.0],
-            normal: [0.0, 1.0],
+            point: lbdem_kernels::math::vector(0.0, 0.0),
+            normal: lbdem_kernels::math::vector(0.0, 1.0),
         },
         Wall {
-            point: [0.0, 0.0],
-            normal: [1.0, 0.0],
+            point: lbdem_kernels::math::vector(0.0, 0.0),
+            normal: lbdem_kernels::math::vector(1.0, 0.0),
         },
         Wall {
-            point: [width, 0.0],
-            normal: [-1.0, 0.0],
+            point: lbdem_kernels::math::vector(width, 0.0),
+            normal: lbdem_kernels::math::vector(-1.0, 0.0),
         },
     ];
     let mut particles: Vec<Particle<f64>> = (0..24)
@@ -400,9 +456,15 @@ fn pour(use_assembly: bool) -> (Vec<Particle<f64>>, [f64; 2]) {
             let pos = [0.14 + 0.24 * col as f64, 0.15 + 0.25 * row as f64];
             let size = 0.08 + 0.03 * ((k * 7 % 5) as f64 / 4.0);
             if k % 2 == 0 {
-                Particle::disc(pos, size * 0.9, DENSITY)
+                Particle::disc(lbdem_kernels::math::Vector::from(pos), size * 0.9, DENSITY)
             } else {
-                Particle::ellipse(pos, 0.37 * k as f64, size, 0.5 * size, DENSITY)
+                Particle::ellipse(
+                    lbdem_kernels::math::Vector::from(pos),
+                    0.37 * k as f64,
+                    size,
+                    0.5 * size,
+                    DENSITY,
+                )
             }
         })
         .collect();
@@ -412,7 +474,13 @@ fn pour(use_assembly: bool) -> (Vec<Particle<f64>>, [f64; 2]) {
         .map(|p| p.mass)
         .fold(f64::INFINITY, f64::min);
     let dt = 0.1 * single_dof_stability_limit(m_min, KS);
-    let grid = CellGrid::covering([0.0, 0.0], [width, 2.0], 2.0 * 0.11 + 0.01, 64).unwrap();
+    let grid = CellGrid::covering(
+        lbdem_kernels::math::vector(0.0, 0.0),
+        lbdem_kernels::math::vector(width, 2.0),
+        2.0 * 0.11 + 0.01,
+        64,
+    )
+    .unwrap();
     let mut start = vec![0; grid.cell_start_len()];
     let mut order = vec![0; n];
     let radii: Vec<f64> = particles
@@ -424,9 +492,10 @@ fn pour(use_assembly: bool) -> (Vec<Particle<f64>>, [f64; 2]) {
     let mut prev_pairs: Vec<[usize; 2]> = Vec::new();
     let mut prev_values: Vec<f64> = Vec::new();
     let mut wall_shear = vec![0.0; 3 * n];
-    let mut wall_force = [0.0f64; 2];
+    let mut wall_force = lbdem_kernels::math::Vector::<f64>::zeros();
     for _ in 0..12_000 {
-        let positions: Vec<[f64; 2]> = particles.iter().map(|p| p.position).collect();
+        let positions: Vec<lbdem_kernels::math::Vector<f64>> =
+            particles.iter().map(|p| p.position).collect();
         build_cell_grid(&grid, &positions, &mut start, &mut order).unwrap();
         let count =
             candidate_pairs(&grid, &positions, &radii, 0.01, &start, &order, &mut pairs).unwrap();
@@ -442,7 +511,7 @@ fn pour(use_assembly: bool) -> (Vec<Particle<f64>>, [f64; 2]) {
                 restitution: 0.5,
                 no_tension: true,
             };
-            let mut force = vec![[0.0f64; 2]; n];
+            let mut force = vec![lbdem_kernels::math::Vector::<f64>::zeros(); n];
             let mut torque = vec![0.0f64; n];
             let mut slots = vec![ContactForce::zero(); pairs.len()];
             pair_contacts(&model, &particles, pairs, values, dt, &mut slots).unwrap();
@@ -465,13 +534,15 @@ fn pour(use_assembly: bool) -> (Vec<Particle<f64>>, [f64; 2]) {
             // The walls' loads are what the particles do to them; the walls act with the opposite.
             wall_force = loads
                 .iter()
-                .fold([0.0; 2], |a, l| [a[0] - l.force[0], a[1] - l.force[1]]);
+                .fold(lbdem_kernels::math::Vector::zeros(), |a, l| {
+                    lbdem_kernels::math::vector(a[0] - l.force[0], a[1] - l.force[1])
+                });
             integrate_all(
                 &mut particles,
                 &force,
                 &torque,
                 &vec![false; n],
-                [0.0, -G],
+                lbdem_kernels::math::vector(0.0, -G),
                 0.7,
                 dt,
             )
@@ -482,7 +553,7 @@ fn pour(use_assembly: bool) -> (Vec<Particle<f64>>, [f64; 2]) {
             prev_values.extend_from_slice(values);
             continue;
         }
-        let mut force = vec![[0.0f64; 2]; n];
+        let mut force = vec![lbdem_kernels::math::Vector::<f64>::zeros(); n];
         let mut torque = vec![0.0f64; n];
         for (&[i, j], shear) in pairs.iter().zip(values.iter_mut()) {
             let c = closest_approach(&particles[i], &particles[j]);
@@ -496,12 +567,12 @@ fn pour(use_assembly: bool) -> (Vec<Particle<f64>>, [f64; 2]) {
                 shear,
                 dt,
             );
-            force[i] = add(force[i], f.force_on_i);
-            force[j] = add(force[j], f.force_on_j);
+            force[i] += f.force_on_i;
+            force[j] += f.force_on_j;
             torque[i] += f.torque_on_i;
             torque[j] += f.torque_on_j;
         }
-        wall_force = [0.0; 2];
+        wall_force = lbdem_kernels::math::Vector::zeros();
         for (i, p) in particles.iter().enumerate() {
             for (w, wall) in walls.iter().enumerate() {
                 let shear = &mut wall_shear[3 * i + w];
@@ -518,13 +589,13 @@ fn pour(use_assembly: bool) -> (Vec<Particle<f64>>, [f64; 2]) {
                     shear,
                     dt,
                 );
-                force[i] = add(force[i], f.force_on_i);
-                wall_force = add(wall_force, f.force_on_i);
+                force[i] += f.force_on_i;
+                wall_force += f.force_on_i;
                 torque[i] += f.torque_on_i;
             }
         }
         for ((p, f), t) in particles.iter_mut().zip(&force).zip(&torque) {
-            central_difference_step(p, *f, *t, [0.0, -G], 0.7, dt);
+            central_difference_step(p, *f, *t, lbdem_kernels::math::vector(0.0, -G), 0.7, dt);
         }
         prev_pairs.clear();
         prev_pairs.extend_from_slice(pairs);
@@ -551,7 +622,7 @@ fn pour(use_assembly: bool) -> (Vec<Particle<f64>>, [f64; 2]) {
         "net horizontal {}",
         wall_force[0]
     );
-    (particles, wall_force)
+    (particles, wall_force.into())
 }
 
 /// Point bond of eq. 6.13 with the table 6.1 values (k_b = 1e5 dyne/cm, F_crit = 700 dyne) between two
@@ -566,8 +637,20 @@ fn point_bond_breaks_at_the_dissertation_strength() {
         ([1.0, 0.0], BreakMode::Tension),
         ([0.0, 1.0], BreakMode::Shear),
     ] {
-        let a = Particle::ellipse([0.0, 0.0], 0.0, 0.11, 0.055, DENSITY);
-        let mut b = Particle::ellipse([0.11 + 0.09 + 1e-3, 0.0], 0.0, 0.09, 0.045, DENSITY);
+        let a = Particle::ellipse(
+            lbdem_kernels::math::vector(0.0, 0.0),
+            0.0,
+            0.11,
+            0.055,
+            DENSITY,
+        );
+        let mut b = Particle::ellipse(
+            lbdem_kernels::math::vector(0.11 + 0.09 + 1e-3, 0.0),
+            0.0,
+            0.09,
+            0.045,
+            DENSITY,
+        );
         let mut bond = PointBond::between(&a, &b, kb, fcrit);
         // The closest surface points are the two tips, 1e-3 apart.
         assert!((bond.rest_gap[0] - 1e-3).abs() < 1e-12 && bond.rest_gap[1].abs() < 1e-12);
@@ -606,9 +689,9 @@ fn point_bond_breaks_at_the_dissertation_strength() {
                 && (broke.position[1] - expected[1]).abs() < 1e-9
         );
         // Broken for good: even back at the rest position it carries nothing.
-        b.position = [0.11 + 0.09 + 1e-3, 0.0];
+        b.position = lbdem_kernels::math::vector(0.11 + 0.09 + 1e-3, 0.0);
         let f = point_bond_force(&mut bond, &a, &b);
-        assert!(f.broke.is_none() && f.force_on_j == [0.0, 0.0]);
+        assert!(f.broke.is_none() && f.force_on_j == lbdem_kernels::math::vector(0.0, 0.0));
     }
 }
 
@@ -622,7 +705,7 @@ fn parallel_bond_breaks_where_the_beam_formulas_say() {
     let (r, dt): (f64, f64) = (0.1, 1e-6);
     let fresh = ParallelBond::new(r, r, 1.0, kn, ks, sigma_c, tau_c);
     assert!((fresh.inertia() - 2.0 * r * r * r / 3.0).abs() < 1e-18);
-    let i = BodyState::fixed([0.0, 0.0]);
+    let i = BodyState::fixed(lbdem_kernels::math::vector(0.0, 0.0));
     let cases = [
         // (velocity of j, angular velocity of j, mode, time to break)
         (
@@ -637,8 +720,8 @@ fn parallel_bond_breaks_where_the_beam_formulas_say() {
     for (velocity, omega, mode, t_star) in cases {
         let mut bond = fresh;
         let mut j = BodyState {
-            position: [2.0 * r, 0.0],
-            velocity,
+            position: lbdem_kernels::math::vector(2.0 * r, 0.0),
+            velocity: lbdem_kernels::math::Vector::from(velocity),
             angular_velocity: 0.0,
         };
         j.angular_velocity = omega;
@@ -664,10 +747,10 @@ fn parallel_bond_breaks_where_the_beam_formulas_say() {
 #[test]
 fn single_precision_disc_settles_too() {
     // f32 instantiation of the whole chain: contact, law, integrator.
-    let mut p = Particle::<f32>::disc([0.0, 0.11], 0.1, 2.6);
+    let mut p = Particle::<f32>::disc(lbdem_kernels::math::vector(0.0, 0.11), 0.1, 2.6);
     let wall = Wall {
-        point: [0.0f32, 0.0],
-        normal: [0.0, 1.0],
+        point: lbdem_kernels::math::vector(0.0f32, 0.0),
+        normal: lbdem_kernels::math::vector(0.0, 1.0),
     };
     let law = ContactLaw::elastic(1e5f32, 6e5, 0.5).with_restitution(0.5, p.mass);
     let dt = contact_duration(1e5f32, p.mass, 0.0) / 50.0;
@@ -687,9 +770,16 @@ fn single_precision_disc_settles_too() {
                 );
                 (fc.force_on_i, fc.torque_on_i)
             }
-            None => ([0.0; 2], 0.0),
+            None => (lbdem_kernels::math::Vector::zeros(), 0.0),
         };
-        central_difference_step(&mut p, f, t, [0.0, -981.0], 0.7, dt);
+        central_difference_step(
+            &mut p,
+            f,
+            t,
+            lbdem_kernels::math::vector(0.0, -981.0),
+            0.7,
+            dt,
+        );
     }
     let expected = p.mass * 981.0 / 1e5;
     // The overlap (8e-4) is computed as h − (c − p)·m with c ≈ 0.1: f32 cancellation leaves ~ulp(0.1) ≈ 7e-9,
@@ -707,11 +797,23 @@ fn single_precision_disc_settles_too() {
 /// stored energy is released or dissipated once the contact ends).
 #[test]
 fn oblique_ellipse_collision_conserves_momentum_and_angular_momentum() {
-    let mut a = Particle::ellipse([0.0, 0.0], 0.4, 0.11, 0.055, DENSITY);
-    let mut b = Particle::ellipse([0.25, 0.06], -1.1, 0.09, 0.045, DENSITY);
-    a.velocity = [3.0, 0.5];
+    let mut a = Particle::ellipse(
+        lbdem_kernels::math::vector(0.0, 0.0),
+        0.4,
+        0.11,
+        0.055,
+        DENSITY,
+    );
+    let mut b = Particle::ellipse(
+        lbdem_kernels::math::vector(0.25, 0.06),
+        -1.1,
+        0.09,
+        0.045,
+        DENSITY,
+    );
+    a.velocity = lbdem_kernels::math::vector(3.0, 0.5);
     a.angular_velocity = 20.0;
-    b.velocity = [-2.0, -0.4];
+    b.velocity = lbdem_kernels::math::vector(-2.0, -0.4);
     b.angular_velocity = -35.0;
     let momentum = |a: &Particle<f64>, b: &Particle<f64>| {
         [
@@ -723,7 +825,7 @@ fn oblique_ellipse_collision_conserves_momentum_and_angular_momentum() {
         [a, b]
             .iter()
             .map(|p| {
-                p.mass * cross(p.position, p.velocity) + p.moment_of_inertia * p.angular_velocity
+                p.mass * cross(&p.position, &p.velocity) + p.moment_of_inertia * p.angular_velocity
             })
             .sum::<f64>()
     };
@@ -751,8 +853,22 @@ fn oblique_ellipse_collision_conserves_momentum_and_angular_momentum() {
             dt,
         );
         sliding_seen |= f.sliding;
-        central_difference_step(&mut a, f.force_on_i, f.torque_on_i, [0.0; 2], 0.0, dt);
-        central_difference_step(&mut b, f.force_on_j, f.torque_on_j, [0.0; 2], 0.0, dt);
+        central_difference_step(
+            &mut a,
+            f.force_on_i,
+            f.torque_on_i,
+            lbdem_kernels::math::Vector::zeros(),
+            0.0,
+            dt,
+        );
+        central_difference_step(
+            &mut b,
+            f.force_on_j,
+            f.torque_on_j,
+            lbdem_kernels::math::Vector::zeros(),
+            0.0,
+            dt,
+        );
     }
     assert!(
         touched && steps_in_contact > 20,

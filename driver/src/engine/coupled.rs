@@ -15,6 +15,7 @@
 use lbdem_kernels::coupling::{BodyShape, CoupledBody};
 use lbdem_kernels::dem::shape::Shape;
 use lbdem_kernels::fluid::collide::Weighting;
+use lbdem_kernels::math::{Point, Vector};
 use lbdem_kernels::Real;
 use std::time::{Duration, Instant};
 
@@ -68,7 +69,7 @@ pub struct CoupledWorld<T: Real = f64> {
     /// DEM steps per fluid step.
     pub substeps: u32,
     /// Loads applied to each grain besides the fluid's (physical units): force and torque.
-    pub applied: Vec<([f64; 2], f64)>,
+    pub applied: Vec<(Vector<f64>, f64)>,
     /// Per-grain fluid radius factors overriding `fluid_radius` (empty: every grain uses `fluid_radius`);
     /// used for bands of changed pore-throat size (dissertation §6.8.1).
     pub grain_fluid_radius: Vec<f64>,
@@ -105,7 +106,7 @@ impl<T: Real> CoupledWorld<T> {
         }
         dem.set_timestep(map.timestep / substeps as f64)?;
         let n = dem.particles.len();
-        dem.external_force = vec![[0.0; 2]; n];
+        dem.external_force = vec![lbdem_kernels::math::Vector::from([0.0; 2]); n];
         dem.external_torque = vec![0.0; n];
         Ok(Self {
             fluid,
@@ -114,7 +115,7 @@ impl<T: Real> CoupledWorld<T> {
             fluid_radius,
             weighting,
             substeps,
-            applied: vec![([0.0; 2], 0.0); n],
+            applied: vec![(Vector::zeros(), 0.0); n],
             grain_fluid_radius: Vec::new(),
             steps: 0,
             timings: None,
@@ -177,11 +178,13 @@ impl<T: Real> CoupledWorld<T> {
                     },
                 };
                 CoupledBody {
-                    center: m.position_to_lattice(p.position),
-                    velocity: [
+                    center: lbdem_kernels::math::Vector::from(
+                        m.position_to_lattice(p.position.into()),
+                    ),
+                    velocity: lbdem_kernels::math::vector(
                         p.velocity[0] * to_lattice_velocity,
                         p.velocity[1] * to_lattice_velocity,
-                    ],
+                    ),
                     spin: m.spin_to_lattice(p.angular_velocity),
                     shape: shape.scaled(factor),
                 }
@@ -202,11 +205,12 @@ impl<T: Real> CoupledWorld<T> {
         self.fluid.step();
         let fluid = lap(t0);
         let t0 = clock();
-        let centers: Vec<[f64; 2]> = bodies.iter().map(|b| b.center).collect();
+        let centers: Vec<Point<f64>> = bodies.iter().map(|b| b.center).collect();
         let (forces, torques) = self.fluid.solid_forces_and_torques(&centers);
         let (force_scale, torque_scale) = (self.map.force_scale(), self.map.torque_scale());
         for (i, ((f, t), (af, at))) in forces.iter().zip(&torques).zip(&self.applied).enumerate() {
-            self.dem.external_force[i] = [f[0] * force_scale + af[0], f[1] * force_scale + af[1]];
+            self.dem.external_force[i] =
+                lbdem_kernels::math::vector(f[0] * force_scale + af[0], f[1] * force_scale + af[1]);
             self.dem.external_torque[i] = t * torque_scale + at;
         }
         let coupling = lap(t0);

@@ -25,6 +25,7 @@ use lbdem_kernels::fluid::step::{
     gather_node_in, gathered_moments_in, nodes_in_rows, open_links, planes_mut, special_node_value,
     CoveredNodes, Domain, FluidParams, FLUID, SOLID,
 };
+use lbdem_kernels::math::{Point, Vector};
 use lbdem_kernels::Real;
 use rayon::prelude::*;
 use std::borrow::Cow;
@@ -124,7 +125,7 @@ struct BodyCells {
 impl BodyCells {
     /// Bit pattern of everything the cell fractions depend on: the kind of shape, centre and shape parameters.
     fn geometry_key(body: &CoupledBody<f64>) -> [u64; 6] {
-        let [cx, cy] = body.center.map(f64::to_bits);
+        let [cx, cy] = [body.center[0].to_bits(), body.center[1].to_bits()];
         match body.shape {
             BodyShape::Disc { radius } => [0, cx, cy, radius.to_bits(), 0, 0],
             BodyShape::Ellipse {
@@ -552,8 +553,8 @@ impl<T: Real> FluidLattice<T> {
         let bodies: Vec<CoupledBody<f64>> = discs
             .iter()
             .map(|d| CoupledBody {
-                center: d.center,
-                velocity: d.velocity,
+                center: lbdem_kernels::math::Vector::from(d.center),
+                velocity: lbdem_kernels::math::Vector::from(d.velocity),
                 spin: d.spin,
                 shape: BodyShape::Disc { radius: d.radius },
             })
@@ -651,7 +652,7 @@ impl<T: Real> FluidLattice<T> {
                 *slot += 1;
                 let (x, y) = s.coords(node as usize);
                 let p = [x as f64, y as f64];
-                let v = rigid_velocity(body, p);
+                let v = rigid_velocity(body, lbdem_kernels::math::Vector::from(p));
                 cov.shares[at] = SolidShare {
                     fraction: T::lit(frac),
                     velocity: [T::lit(v[0]), T::lit(v[1])],
@@ -859,14 +860,15 @@ impl<T: Real> FluidLattice<T> {
     }
 
     /// Force on each of `count` solids from the last step (lattice units), summed in a fixed order.
-    pub fn solid_forces(&self, count: usize) -> Vec<[f64; 2]> {
-        self.solid_forces_and_torques(&vec![[0.0; 2]; count]).0
+    pub fn solid_forces(&self, count: usize) -> Vec<Vector<f64>> {
+        self.solid_forces_and_torques(&vec![Vector::zeros(); count])
+            .0
     }
 
     /// Force and torque (about `centers[p]`, lattice units) on each solid from the last step (eq. 4.7–4.8),
     /// reduced by the coupling kernel in the fixed order of the share list.
-    pub fn solid_forces_and_torques(&self, centers: &[[f64; 2]]) -> (Vec<[f64; 2]>, Vec<f64>) {
-        let mut forces = vec![[0.0; 2]; centers.len()];
+    pub fn solid_forces_and_torques(&self, centers: &[Point<f64>]) -> (Vec<Vector<f64>>, Vec<f64>) {
+        let mut forces = vec![Vector::zeros(); centers.len()];
         let mut torques = vec![0.0; centers.len()];
         if let Some(c) = &self.coverage {
             let exchange: Vec<[f64; 2]> = c
@@ -1357,7 +1359,8 @@ mod tests {
                 for x in x0..=x1 {
                     let frac = body_cell_fraction(body, x as f64, y as f64);
                     if !l.on_zou_he_side(x, y) && frac > 0.0 {
-                        let v = rigid_velocity(body, [x as f64, y as f64]);
+                        let v =
+                            rigid_velocity(body, lbdem_kernels::math::vector(x as f64, y as f64));
                         let share = [frac, v[0], v[1]].map(|v| T::lit(v).to_f64_exact().to_bits());
                         entries.push((s.index(x, y) as u32, k as u32, share, [x as f64, y as f64]));
                     }
@@ -1399,11 +1402,14 @@ mod tests {
                     }
                 };
                 CoupledBody {
-                    center: [
+                    center: lbdem_kernels::math::vector(
                         rng.random_range(-3.0..nx + 3.0),
                         rng.random_range(-3.0..ny + 3.0),
-                    ],
-                    velocity: [rng.random_range(-0.05..0.05), rng.random_range(-0.05..0.05)],
+                    ),
+                    velocity: lbdem_kernels::math::vector(
+                        rng.random_range(-0.05..0.05),
+                        rng.random_range(-0.05..0.05),
+                    ),
                     spin: rng.random_range(-0.01..0.01),
                     shape,
                 }
@@ -1415,10 +1421,10 @@ mod tests {
     fn advance(rng: &mut ChaCha8Rng, bodies: &mut [CoupledBody<f64>]) {
         for (k, b) in bodies.iter_mut().enumerate() {
             // Bounded (|u| ≤ 0.05) so that the fluid stays stable.
-            b.velocity = [
+            b.velocity = lbdem_kernels::math::vector(
                 (b.velocity[0] + rng.random_range(-0.01..0.01)).clamp(-0.05, 0.05),
                 (b.velocity[1] + rng.random_range(-0.01..0.01)).clamp(-0.05, 0.05),
-            ];
+            );
             if k % 5 == 0 {
                 continue;
             }
@@ -1494,7 +1500,7 @@ mod tests {
                 .zip(scratch.populations().iter())
                 .all(|(a, b)| a.to_f64_exact().to_bits() == b.to_f64_exact().to_bits());
             assert!(same, "step {step}: populations differ");
-            let centers: Vec<[f64; 2]> = bodies.iter().map(|b| b.center).collect();
+            let centers: Vec<Point<f64>> = bodies.iter().map(|b| b.center).collect();
             let (fa, ta) = incremental.solid_forces_and_torques(&centers);
             let (fb, tb) = scratch.solid_forces_and_torques(&centers);
             assert!(fa == fb && ta.iter().zip(&tb).all(|(a, b)| a.to_bits() == b.to_bits()));

@@ -328,7 +328,7 @@ pub fn free_disc(m: Method, tau: f64, density: f64) -> Outcome {
     let force = 2.1e-3 * (nu / 0.1).powi(2);
     let steps = (12.0 * l * l / (4.0 * std::f64::consts::PI.powi(2) * nu)).round() as u64;
     let center = [0.5 * l - 0.25, 0.5 * l + 0.15];
-    let disc = Particle::disc(center, radius, density);
+    let disc = Particle::disc(center.into(), radius, density);
     let mass = disc.mass;
     let model = ContactModel {
         normal_stiffness: 1e-6 * mass,
@@ -355,7 +355,7 @@ pub fn free_disc(m: Method, tau: f64, density: f64) -> Outcome {
     dem.local_damping = 0.0;
     let mut world =
         CoupledWorld::new(fluid, dem, LatticeMap::identity(), 1.0, m.weighting, 1).unwrap();
-    world.applied[0] = ([force, 0.0], 0.0);
+    world.applied[0] = ([force, 0.0].into(), 0.0);
     let total = |w: &CoupledWorld| -> f64 {
         w.fluid.momentum()[0] + w.dem.particles[0].mass * w.dem.particles[0].velocity[0]
     };

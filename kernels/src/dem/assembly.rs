@@ -26,12 +26,19 @@ use super::contact::{closest_approach, wall_contact};
 use super::integrate::{central_difference_step, particle_critical_time_step};
 use super::law::{effective_mass, linear_contact_force, BodyState, ContactForce, ContactLaw};
 use super::shape::{Particle, Wall};
-use super::vector::add;
+use crate::math::Vector;
 use crate::Real;
 
 /// Material parameters of the particle contacts.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(
+    feature = "serde",
+    serde(bound(
+        serialize = "T: crate::Real + serde::Serialize",
+        deserialize = "T: crate::Real + serde::Deserialize<'de>"
+    ))
+)]
 pub struct ContactModel<T> {
     /// Normal stiffness k_n.
     pub normal_stiffness: T,
@@ -138,6 +145,13 @@ pub enum AssemblyError {
 /// Contact statistics of a pair list, counted and summed in pair order by [`add_pair_forces`].
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(
+    feature = "serde",
+    serde(bound(
+        serialize = "T: crate::Real + serde::Serialize",
+        deserialize = "T: crate::Real + serde::Deserialize<'de>"
+    ))
+)]
 pub struct ContactSums<T> {
     /// Active contacts: pairs whose bodies interpenetrate (overlap δ > 0), the same test as
     /// [`Contact::is_active`](super::contact::Contact::is_active).
@@ -205,7 +219,7 @@ pub fn pair_contacts<T: Real>(
 pub fn add_pair_forces<T: Real>(
     pairs: &[[usize; 2]],
     contacts: &[ContactForce<T>],
-    force: &mut [[T; 2]],
+    force: &mut [Vector<T>],
     torque: &mut [T],
 ) -> Result<ContactSums<T>, AssemblyError> {
     if contacts.len() < pairs.len() {
@@ -229,8 +243,8 @@ pub fn add_pair_forces<T: Real>(
         }
         // An inactive contact's slot holds zeros: adding it changes no sum but the sign of a zero one; it is
         // added all the same, so that the totals are those of adding every pair's slot in pair order.
-        force[i] = add(force[i], f.force_on_i);
-        force[j] = add(force[j], f.force_on_j);
+        force[i] += f.force_on_i;
+        force[j] += f.force_on_j;
         torque[i] += f.torque_on_i;
         torque[j] += f.torque_on_j;
     }
@@ -264,7 +278,7 @@ pub fn bond_forces<T: Real>(
 pub fn add_bond_forces<T: Real>(
     bonds: &[Bond<T>],
     forces: &[BondForce<T>],
-    force: &mut [[T; 2]],
+    force: &mut [Vector<T>],
     torque: &mut [T],
 ) -> Result<usize, AssemblyError> {
     if forces.len() < bonds.len() {
@@ -284,8 +298,8 @@ pub fn add_bond_forces<T: Real>(
             continue;
         }
         let [i, j] = b.pair;
-        force[i] = add(force[i], f.force_on_i);
-        force[j] = add(force[j], f.force_on_j);
+        force[i] += f.force_on_i;
+        force[j] += f.force_on_j;
         torque[i] += f.torque_on_i;
         torque[j] += f.torque_on_j;
     }
@@ -299,7 +313,7 @@ pub struct WallBody<T> {
     /// Position and outward normal.
     pub wall: Wall<T>,
     /// Velocity of the wall (rigid translation).
-    pub velocity: [T; 2],
+    pub velocity: Vector<T>,
     /// Whether the wall interacts with the particles.
     pub active: bool,
 }
@@ -309,7 +323,7 @@ impl<T: Real> WallBody<T> {
     pub fn fixed(wall: Wall<T>) -> Self {
         WallBody {
             wall,
-            velocity: [T::zero(); 2],
+            velocity: Vector::zeros(),
             active: true,
         }
     }
@@ -321,7 +335,7 @@ pub struct WallContactForce<T> {
     /// Whether they touched (an active contact).
     pub touching: bool,
     /// Force of the wall on the particle (zero when not touching).
-    pub force_on_particle: [T; 2],
+    pub force_on_particle: Vector<T>,
 }
 
 impl<T: Real> WallContactForce<T> {
@@ -329,18 +343,27 @@ impl<T: Real> WallContactForce<T> {
     pub fn none() -> Self {
         WallContactForce {
             touching: false,
-            force_on_particle: [T::zero(); 2],
+            force_on_particle: Vector::zeros(),
         }
     }
 }
 
 /// What the particles did to one wall in a step ([`wall_loads`]).
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct WallLoad<T> {
     /// Total force the particles exerted on the wall.
-    pub force: [T; 2],
+    pub force: Vector<T>,
     /// Active contacts with the wall.
     pub contacts: usize,
+}
+
+impl<T: Real> Default for WallLoad<T> {
+    fn default() -> Self {
+        WallLoad {
+            force: Vector::zeros(),
+            contacts: 0,
+        }
+    }
 }
 
 /// Length of the wall shear history and of the slot slice of [`add_wall_contact_forces`] for `particles`
@@ -363,7 +386,7 @@ pub fn add_wall_contact_forces<T: Real>(
     walls: &[WallBody<T>],
     wall_shear: &mut [T],
     dt: T,
-    force: &mut [[T; 2]],
+    force: &mut [Vector<T>],
     torque: &mut [T],
     on_walls: &mut [WallContactForce<T>],
 ) -> Result<(), AssemblyError> {
@@ -404,7 +427,7 @@ pub fn add_wall_contact_forces<T: Real>(
                 history,
                 dt,
             );
-            *f = add(*f, cf.force_on_i);
+            *f += cf.force_on_i;
             *t += cf.torque_on_i;
             *slot = WallContactForce {
                 touching: true,
@@ -435,7 +458,7 @@ pub fn wall_loads<T: Real>(
     }
     for l in loads.iter_mut() {
         *l = WallLoad {
-            force: [T::zero(); 2],
+            force: Vector::zeros(),
             contacts: 0,
         };
     }
@@ -456,10 +479,10 @@ pub fn wall_loads<T: Real>(
 /// one entry per particle. Chunkable: element by element.
 pub fn integrate_all<T: Real>(
     particles: &mut [Particle<T>],
-    force: &[[T; 2]],
+    force: &[Vector<T>],
     torque: &[T],
     held: &[bool],
-    gravity: [T; 2],
+    gravity: Vector<T>,
     alpha: T,
     dt: T,
 ) -> Result<(), AssemblyError> {

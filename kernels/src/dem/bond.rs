@@ -28,7 +28,7 @@
 use super::contact::closest_approach;
 use super::law::BodyState;
 use super::shape::Particle;
-use super::vector::{add, cross, dot, norm, perp, rotate, scale, sub};
+use crate::math::{cross, norm, perp, rotate, rotate_by, rotation, Vector};
 use crate::Real;
 
 /// How a bond failed.
@@ -51,7 +51,7 @@ pub struct BondBreak<T> {
     /// Angle (radians, counter-clockwise from +x) of the bond normal (i → j) when it broke.
     pub orientation: T,
     /// Where the bond was (its force point).
-    pub position: [T; 2],
+    pub position: Vector<T>,
     /// The load that broke it: |F| for a point bond, the governing peak stress for a parallel bond.
     pub load: T,
 }
@@ -60,9 +60,9 @@ pub struct BondBreak<T> {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct BondForce<T> {
     /// Force on particle i (= −`force_on_j`).
-    pub force_on_i: [T; 2],
+    pub force_on_i: Vector<T>,
     /// Force on particle j.
-    pub force_on_j: [T; 2],
+    pub force_on_j: Vector<T>,
     /// Torque on i about its centre.
     pub torque_on_i: T,
     /// Torque on j about its centre.
@@ -79,8 +79,8 @@ impl<T: Real> BondForce<T> {
 
     fn idle(broke: Option<BondBreak<T>>) -> Self {
         BondForce {
-            force_on_i: [T::zero(); 2],
-            force_on_j: [T::zero(); 2],
+            force_on_i: Vector::zeros(),
+            force_on_j: Vector::zeros(),
             torque_on_i: T::zero(),
             torque_on_j: T::zero(),
             broke,
@@ -91,15 +91,22 @@ impl<T: Real> BondForce<T> {
 /// The point bond of eq. 6.13.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(
+    feature = "serde",
+    serde(bound(
+        serialize = "T: crate::Real + serde::Serialize",
+        deserialize = "T: crate::Real + serde::Deserialize<'de>"
+    ))
+)]
 pub struct PointBond<T> {
     /// Material point on i, in i's body frame (offset from its centre at zero angle).
-    pub anchor_i: [T; 2],
+    pub anchor_i: Vector<T>,
     /// Material point on j, in j's body frame.
-    pub anchor_j: [T; 2],
+    pub anchor_j: Vector<T>,
     /// Gap vector p_j − p_i at bonding (world frame).
-    pub rest_gap: [T; 2],
+    pub rest_gap: Vector<T>,
     /// Bond normal (i → j) at bonding.
-    pub rest_normal: [T; 2],
+    pub rest_normal: Vector<T>,
     /// Angles of i and j at bonding.
     pub rest_angles: [T; 2],
     /// Stiffness k_b.
@@ -115,9 +122,9 @@ impl<T: Real> PointBond<T> {
     pub fn between(i: &Particle<T>, j: &Particle<T>, stiffness: T, strength: T) -> Self {
         let c = closest_approach(i, j);
         PointBond {
-            anchor_i: rotate(sub(c.point_i, i.position), -i.angle),
-            anchor_j: rotate(sub(c.point_j, j.position), -j.angle),
-            rest_gap: sub(c.point_j, c.point_i),
+            anchor_i: rotate(&(c.point_i - i.position), -i.angle),
+            anchor_j: rotate(&(c.point_j - j.position), -j.angle),
+            rest_gap: (c.point_j - c.point_i),
             rest_normal: c.normal,
             rest_angles: [i.angle, j.angle],
             stiffness,
@@ -127,21 +134,23 @@ impl<T: Real> PointBond<T> {
     }
 
     /// Current world positions of the two material points.
-    pub fn material_points(&self, i: &Particle<T>, j: &Particle<T>) -> ([T; 2], [T; 2]) {
+    pub fn material_points(&self, i: &Particle<T>, j: &Particle<T>) -> (Vector<T>, Vector<T>) {
         (
-            add(i.position, rotate(self.anchor_i, i.angle)),
-            add(j.position, rotate(self.anchor_j, j.angle)),
+            (i.position + rotate(&self.anchor_i, i.angle)),
+            (j.position + rotate(&self.anchor_j, j.angle)),
         )
     }
 
     /// Δx = g − R(φ̄) g₀ and the rotated bond normal R(φ̄) n₀.
-    pub fn stretch(&self, i: &Particle<T>, j: &Particle<T>) -> ([T; 2], [T; 2]) {
+    pub fn stretch(&self, i: &Particle<T>, j: &Particle<T>) -> (Vector<T>, Vector<T>) {
         let (pi, pj) = self.material_points(i, j);
         let mean =
             T::lit(0.5) * ((i.angle - self.rest_angles[0]) + (j.angle - self.rest_angles[1]));
-        let (c, s) = (mean.portable_cos(), mean.portable_sin());
-        let rot = |v: [T; 2]| [c * v[0] - s * v[1], s * v[0] + c * v[1]];
-        (sub(sub(pj, pi), rot(self.rest_gap)), rot(self.rest_normal))
+        let r = rotation(mean);
+        (
+            (pj - pi) - rotate_by(&r, &self.rest_gap),
+            rotate_by(&r, &self.rest_normal),
+        )
     }
 }
 
@@ -155,14 +164,14 @@ pub fn point_bond_force<T: Real>(
         return BondForce::idle(None);
     }
     let (pi, pj) = bond.material_points(i, j);
-    let x = scale(add(pi, pj), T::lit(0.5));
+    let x = (pi + pj) * T::lit(0.5);
     let (dx, n) = bond.stretch(i, j);
-    let force_on_j = scale(dx, -bond.stiffness);
-    let magnitude = norm(force_on_j);
+    let force_on_j = dx * (-bond.stiffness);
+    let magnitude = norm(&force_on_j);
     if magnitude >= bond.strength {
         bond.intact = false;
-        let normal_part = dot(dx, n);
-        let shear_part = dot(dx, perp(n)).abs();
+        let normal_part = dx.dot(&n);
+        let shear_part = dx.dot(&perp(&n)).abs();
         let mode = if shear_part > normal_part.abs() {
             BreakMode::Shear
         } else if normal_part >= T::zero() {
@@ -177,12 +186,12 @@ pub fn point_bond_force<T: Real>(
             load: magnitude,
         }));
     }
-    let force_on_i = [-force_on_j[0], -force_on_j[1]];
+    let force_on_i = -force_on_j;
     BondForce {
         force_on_i,
         force_on_j,
-        torque_on_i: cross(sub(x, i.position), force_on_i),
-        torque_on_j: cross(sub(x, j.position), force_on_j),
+        torque_on_i: cross(&(x - i.position), &force_on_i),
+        torque_on_j: cross(&(x - j.position), &force_on_j),
         broke: None,
     }
 }
@@ -190,6 +199,13 @@ pub fn point_bond_force<T: Real>(
 /// The Potyondy–Cundall parallel bond, 2-D, unit thickness.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(
+    feature = "serde",
+    serde(bound(
+        serialize = "T: crate::Real + serde::Serialize",
+        deserialize = "T: crate::Real + serde::Deserialize<'de>"
+    ))
+)]
 pub struct ParallelBond<T> {
     /// Bond radius R̄ = λ̄ min(R_i, R_j).
     pub radius: T,
@@ -270,22 +286,19 @@ pub fn parallel_bond_force<T: Real>(
     if !bond.intact {
         return BondForce::idle(None);
     }
-    let d = sub(body_j.position, body_i.position);
-    let dist = norm(d);
+    let d = body_j.position - body_i.position;
+    let dist = norm(&d);
     let n = if dist > T::zero() {
-        scale(d, T::one() / dist)
+        d * (T::one() / dist)
     } else {
-        [T::one(), T::zero()]
+        Vector::new(T::one(), T::zero())
     };
-    let t = perp(n);
-    let x = add(
-        body_i.position,
-        scale(n, radius_i + T::lit(0.5) * (dist - radius_i - radius_j)),
-    );
-    let v = sub(body_j.velocity_at(x), body_i.velocity_at(x));
+    let t = perp(&n);
+    let x = body_i.position + (n * (radius_i + T::lit(0.5) * (dist - radius_i - radius_j)));
+    let v = body_j.velocity_at(x) - body_i.velocity_at(x);
     let (area, inertia) = (bond.area(), bond.inertia());
-    let du_n = -dot(v, n) * dt;
-    let du_s = dot(v, t) * dt;
+    let du_n = -v.dot(&n) * dt;
+    let du_s = v.dot(&t) * dt;
     let dtheta = (body_j.angular_velocity - body_i.angular_velocity) * dt;
     bond.normal_force += bond.normal_stiffness * area * du_n;
     bond.shear_force -= bond.shear_stiffness * area * du_s;
@@ -311,13 +324,13 @@ pub fn parallel_bond_force<T: Real>(
             load,
         }));
     }
-    let force_on_j = add(scale(n, bond.normal_force), scale(t, bond.shear_force));
-    let force_on_i = [-force_on_j[0], -force_on_j[1]];
+    let force_on_j = (n * bond.normal_force) + (t * bond.shear_force);
+    let force_on_i = -force_on_j;
     BondForce {
         force_on_i,
         force_on_j,
-        torque_on_i: cross(sub(x, body_i.position), force_on_i) - bond.moment,
-        torque_on_j: cross(sub(x, body_j.position), force_on_j) + bond.moment,
+        torque_on_i: cross(&(x - body_i.position), &force_on_i) - bond.moment,
+        torque_on_j: cross(&(x - body_j.position), &force_on_j) + bond.moment,
         broke: None,
     }
 }
@@ -325,6 +338,13 @@ pub fn parallel_bond_force<T: Real>(
 /// A bond of an assembly: the particles it joins and its law with its state.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(
+    feature = "serde",
+    serde(bound(
+        serialize = "T: crate::Real + serde::Serialize",
+        deserialize = "T: crate::Real + serde::Deserialize<'de>"
+    ))
+)]
 pub struct Bond<T> {
     /// Particle indices (i < j by convention; i ≠ j).
     pub pair: [usize; 2],
@@ -335,6 +355,13 @@ pub struct Bond<T> {
 /// The two bond laws.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(
+    feature = "serde",
+    serde(bound(
+        serialize = "T: crate::Real + serde::Serialize",
+        deserialize = "T: crate::Real + serde::Deserialize<'de>"
+    ))
+)]
 pub enum BondLaw<T> {
     /// Point bond of eq. 6.13.
     Point(PointBond<T>),

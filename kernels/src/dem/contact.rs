@@ -31,7 +31,7 @@
 //! No NaN on valid input (positive semi-axes, finite positions): coincident centres give a finite unit normal
 //! (deterministic; (1, 0) for two discs through [`disc_disc`]) and the overlap along it.
 use super::shape::{Particle, Placed, Shape, Wall, WallSegment};
-use super::vector::{add, dot, norm, perp, scale, sub, unit};
+use crate::math::{norm, perp, unit, Vector};
 use crate::Real;
 
 /// Number of equally spaced normal angles sampled before the Newton refinement.
@@ -79,15 +79,15 @@ const MAX_GOLDEN: usize = 80;
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Contact<T> {
     /// Contact point: the midpoint of `point_i` and `point_j`.
-    pub point: [T; 2],
+    pub point: Vector<T>,
     /// Unit normal from body i to body j.
-    pub normal: [T; 2],
+    pub normal: Vector<T>,
     /// Signed overlap δ: > 0 interpenetration depth, < 0 separation distance.
     pub overlap: T,
     /// Surface point of body i with outward normal `normal`.
-    pub point_i: [T; 2],
+    pub point_i: Vector<T>,
     /// Surface point of body j with outward normal −`normal` (on the wall surface for a wall).
-    pub point_j: [T; 2],
+    pub point_j: Vector<T>,
 }
 
 impl<T: Real> Contact<T> {
@@ -99,12 +99,12 @@ impl<T: Real> Contact<T> {
 
     /// The unit tangent t = n rotated by +90°.
     #[inline(always)]
-    pub fn tangent(&self) -> [T; 2] {
-        perp(self.normal)
+    pub fn tangent(&self) -> Vector<T> {
+        perp(&self.normal)
     }
 
-    fn from_points(normal: [T; 2], overlap: T, point_i: [T; 2], point_j: [T; 2]) -> Self {
-        let point = scale(add(point_i, point_j), T::lit(0.5));
+    fn from_points(normal: Vector<T>, overlap: T, point_i: Vector<T>, point_j: Vector<T>) -> Self {
+        let point = (point_i + point_j) * T::lit(0.5);
         Contact {
             point,
             normal,
@@ -117,24 +117,24 @@ impl<T: Real> Contact<T> {
 
 /// Disc–disc contact (closed form). Coincident centres: normal (1, 0).
 pub fn disc_disc<T: Real>(
-    centre_i: [T; 2],
+    centre_i: Vector<T>,
     radius_i: T,
-    centre_j: [T; 2],
+    centre_j: Vector<T>,
     radius_j: T,
 ) -> Contact<T> {
-    let d = sub(centre_j, centre_i);
-    let dist = norm(d);
+    let d = centre_j - centre_i;
+    let dist = norm(&d);
     let normal = if dist > T::zero() {
-        scale(d, T::one() / dist)
+        d * (T::one() / dist)
     } else {
-        [T::one(), T::zero()]
+        Vector::new(T::one(), T::zero())
     };
     let overlap = radius_i + radius_j - dist;
     Contact::from_points(
         normal,
         overlap,
-        add(centre_i, scale(normal, radius_i)),
-        sub(centre_j, scale(normal, radius_j)),
+        centre_i + (normal * radius_i),
+        centre_j - (normal * radius_j),
     )
 }
 
@@ -142,15 +142,15 @@ pub fn disc_disc<T: Real>(
 /// point in the direction −m, δ = h(m) − (c − p)·m. The normal is −m.
 pub fn placed_wall<T: Real>(body: &Placed<T>, wall: &Wall<T>) -> Contact<T> {
     let m = wall.normal;
-    let n = [-m[0], -m[1]];
+    let n = -m;
     let point_i = body.support_point(n);
     let overlap = body.support_value(m) - wall.signed_distance(body.centre);
-    let point_j = add(point_i, scale(m, overlap));
+    let point_j = point_i + (m * overlap);
     Contact::from_points(n, overlap, point_i, point_j)
 }
 
 /// Disc–wall contact.
-pub fn disc_wall<T: Real>(centre: [T; 2], radius: T, wall: &Wall<T>) -> Contact<T> {
+pub fn disc_wall<T: Real>(centre: Vector<T>, radius: T, wall: &Wall<T>) -> Contact<T> {
     placed_wall(&Placed::new(centre, T::zero(), radius, radius), wall)
 }
 
@@ -161,23 +161,23 @@ pub fn ellipse_wall<T: Real>(ellipse: &Placed<T>, wall: &Wall<T>) -> Contact<T> 
 
 /// s, s', s'' at angle θ (see the module documentation).
 #[inline(always)]
-fn gap<T: Real>(a: &Placed<T>, b: &Placed<T>, d: [T; 2], theta: T) -> (T, T, T) {
+fn gap<T: Real>(a: &Placed<T>, b: &Placed<T>, d: Vector<T>, theta: T) -> (T, T, T) {
     gap_along(a, b, d, unit(theta))
 }
 
 /// s, s', s'' along the unit direction n.
 #[inline(always)]
-fn gap_along<T: Real>(a: &Placed<T>, b: &Placed<T>, d: [T; 2], n: [T; 2]) -> (T, T, T) {
+fn gap_along<T: Real>(a: &Placed<T>, b: &Placed<T>, d: Vector<T>, n: Vector<T>) -> (T, T, T) {
     let (ha, dha, ra) = a.support_derivatives(n);
     let (hb, dhb, rb) = b.support_derivatives(n);
-    let s = dot(n, d) - ha - hb;
-    let ds = dot(perp(n), d) - dha - dhb;
+    let s = n.dot(&d) - ha - hb;
+    let ds = perp(&n).dot(&d) - dha - dhb;
     let dds = -s - ra - rb;
     (s, ds, dds)
 }
 
 /// Refine a local maximum of s inside [lo, hi] starting from `start`; returns (θ, s(θ)).
-fn refine<T: Real>(a: &Placed<T>, b: &Placed<T>, d: [T; 2], lo: T, hi: T, start: T) -> (T, T) {
+fn refine<T: Real>(a: &Placed<T>, b: &Placed<T>, d: Vector<T>, lo: T, hi: T, start: T) -> (T, T) {
     let (mut lo, mut hi) = (lo, hi);
     let (_, g_lo, _) = gap(a, b, d, lo);
     let (_, g_hi, _) = gap(a, b, d, hi);
@@ -246,13 +246,13 @@ fn refine<T: Real>(a: &Placed<T>, b: &Placed<T>, d: [T; 2], lo: T, hi: T, start:
 /// maximising the separating-axis gap over the normal angle (see the module documentation). Exact for any
 /// orientation; returns the signed overlap whether or not the shapes touch.
 pub fn ellipse_ellipse<T: Real>(a: &Placed<T>, b: &Placed<T>) -> Contact<T> {
-    let d = sub(b.centre, a.centre);
+    let d = b.centre - a.centre;
     let step = T::lit(core::f64::consts::TAU / ELLIPSE_SAMPLES as f64);
     let mut s = [T::zero(); ELLIPSE_SAMPLES];
     let mut best_k = 0;
     for (sk, n) in s.iter_mut().zip(SAMPLE_DIRECTIONS) {
-        let n = [T::lit(n[0]), T::lit(n[1])];
-        *sk = dot(n, d) - a.support_value(n) - b.support_value(n);
+        let n = Vector::new(T::lit(n[0]), T::lit(n[1]));
+        *sk = n.dot(&d) - a.support_value(n) - b.support_value(n);
     }
     for k in 1..ELLIPSE_SAMPLES {
         if s[k] > s[best_k] {
@@ -285,12 +285,12 @@ pub fn ellipse_ellipse<T: Real>(a: &Placed<T>, b: &Placed<T>) -> Contact<T> {
     }
     let n = unit(best_theta);
     let point_i = a.support_point(n);
-    let point_j = b.support_point([-n[0], -n[1]]);
+    let point_j = b.support_point(-n);
     Contact::from_points(n, -best_s, point_i, point_j)
 }
 
 /// Ellipse (i) – disc (j) contact, by [`ellipse_ellipse`] with the disc's constant support function.
-pub fn ellipse_disc<T: Real>(ellipse: &Placed<T>, centre: [T; 2], radius: T) -> Contact<T> {
+pub fn ellipse_disc<T: Real>(ellipse: &Placed<T>, centre: Vector<T>, radius: T) -> Contact<T> {
     ellipse_ellipse(ellipse, &Placed::new(centre, T::zero(), radius, radius))
 }
 
@@ -308,8 +308,8 @@ pub fn closest_approach<T: Real>(i: &Particle<T>, j: &Particle<T>) -> Contact<T>
 /// bounding circles are disjoint or the overlap is ≤ 0.
 pub fn particle_contact<T: Real>(i: &Particle<T>, j: &Particle<T>) -> Option<Contact<T>> {
     let reach = i.shape.bounding_radius() + j.shape.bounding_radius();
-    let d = sub(j.position, i.position);
-    if dot(d, d) >= reach * reach {
+    let d = j.position - i.position;
+    if d.dot(&d) >= reach * reach {
         return None;
     }
     let c = closest_approach(i, j);

@@ -21,13 +21,14 @@
 //!
 //! The index arithmetic (`cell_index`, `neighbour_span`, the counting sort, the history merge) is proved for all small
 //! grids by the bounded-exhaustive harness in `verification/src/harness/dem.rs`.
+use crate::math::Vector;
 use crate::Real;
 
 /// Geometry of a uniform cell grid.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct CellGrid<T> {
     /// Lower-left corner.
-    pub origin: [T; 2],
+    pub origin: Vector<T>,
     /// Edge length of a square cell (> 0).
     pub cell_size: T,
     /// Cells along x (≥ 1).
@@ -74,7 +75,7 @@ pub fn neighbour_span(i: usize, n: usize) -> (usize, usize) {
 
 impl<T: Real> CellGrid<T> {
     /// A grid, or `BadGeometry` when it cannot index (see [`GridError`]).
-    pub fn new(origin: [T; 2], cell_size: T, nx: usize, ny: usize) -> Result<Self, GridError> {
+    pub fn new(origin: Vector<T>, cell_size: T, nx: usize, ny: usize) -> Result<Self, GridError> {
         let ok_size = cell_size > T::zero() && cell_size.is_finite();
         let cells = nx.checked_mul(ny).and_then(|c| c.checked_add(1));
         if !ok_size || nx == 0 || ny == 0 || cells.is_none() {
@@ -91,8 +92,8 @@ impl<T: Real> CellGrid<T> {
     /// A grid covering [lo, hi] with cells of at least `min_cell_size` (and at most `max_cells_per_axis`
     /// cells per axis, the cells growing to fit).
     pub fn covering(
-        lo: [T; 2],
-        hi: [T; 2],
+        lo: Vector<T>,
+        hi: Vector<T>,
         min_cell_size: T,
         max_cells_per_axis: usize,
     ) -> Result<Self, GridError> {
@@ -143,7 +144,7 @@ impl<T: Real> CellGrid<T> {
 
     /// Cell coordinates (ix, iy) of a position, clamped to the grid.
     #[inline(always)]
-    pub fn cell_coords(&self, p: [T; 2]) -> (usize, usize) {
+    pub fn cell_coords(&self, p: Vector<T>) -> (usize, usize) {
         (
             self.axis(p[0], self.origin[0], self.nx),
             self.axis(p[1], self.origin[1], self.ny),
@@ -152,7 +153,7 @@ impl<T: Real> CellGrid<T> {
 
     /// Row-major cell index of a position, clamped to the grid.
     #[inline(always)]
-    pub fn cell_of(&self, p: [T; 2]) -> usize {
+    pub fn cell_of(&self, p: Vector<T>) -> usize {
         let (ix, iy) = self.cell_coords(p);
         cell_index(self.nx, ix, iy)
     }
@@ -168,7 +169,7 @@ pub fn cell_grid_scratch_len<T: Real>(grid: &CellGrid<T>, particles: usize) -> (
 /// `cell_particles[cell_start[c]..cell_start[c + 1]]`, in ascending index order.
 pub fn build_cell_grid<T: Real>(
     grid: &CellGrid<T>,
-    positions: &[[T; 2]],
+    positions: &[Vector<T>],
     cell_start: &mut [usize],
     cell_particles: &mut [usize],
 ) -> Result<(), GridError> {
@@ -208,7 +209,7 @@ pub fn build_cell_grid<T: Real>(
 /// deterministic order described in the module documentation. Writes as many as fit in `pairs`.
 pub fn candidate_pairs<T: Real>(
     grid: &CellGrid<T>,
-    positions: &[[T; 2]],
+    positions: &[Vector<T>],
     bounding_radii: &[T],
     margin: T,
     cell_start: &[usize],

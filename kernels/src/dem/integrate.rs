@@ -23,33 +23,34 @@
 //! Units: consistent (force = mass × length/time²).
 use super::law::local_damping;
 use super::shape::Particle;
+use crate::math::Vector;
 use crate::Real;
 
 /// One central-difference step of a particle under the total contact/bond/fluid force `force` and torque
 /// `torque`, gravity `gravity` (an acceleration, applied as m g) and local damping coefficient `alpha`.
 pub fn central_difference_step<T: Real>(
     particle: &mut Particle<T>,
-    force: [T; 2],
+    force: Vector<T>,
     torque: T,
-    gravity: [T; 2],
+    gravity: Vector<T>,
     alpha: T,
     dt: T,
 ) {
     let m = particle.mass;
     let mut f = [force[0] + m * gravity[0], force[1] + m * gravity[1]];
-    for (fk, vk) in f.iter_mut().zip(particle.velocity) {
-        *fk += local_damping(*fk, vk, alpha);
+    for (fk, vk) in f.iter_mut().zip(particle.velocity.iter()) {
+        *fk += local_damping(*fk, *vk, alpha);
     }
     let torque = torque + local_damping(torque, particle.angular_velocity, alpha);
     let inv_m = T::one() / m;
-    particle.acceleration = [f[0] * inv_m, f[1] * inv_m];
+    particle.acceleration = Vector::new(f[0] * inv_m, f[1] * inv_m);
     for ((v, x), a) in particle
         .velocity
         .iter_mut()
         .zip(particle.position.iter_mut())
-        .zip(particle.acceleration)
+        .zip(particle.acceleration.iter())
     {
-        *v += a * dt;
+        *v += *a * dt;
         *x += *v * dt;
     }
     particle.angular_acceleration = torque / particle.moment_of_inertia;

@@ -27,7 +27,7 @@
 //! Units: k_n, k_s force/length; c_n force·time/length; μ dimensionless; consistent otherwise.
 use super::contact::Contact;
 use super::shape::Particle;
-use super::vector::{add, cross, dot, perp, scale, spin, sub};
+use crate::math::{cross, perp, spin, Vector};
 use crate::Real;
 
 /// PFC's default local-damping coefficient α.
@@ -112,9 +112,9 @@ pub fn contact_duration<T: Real>(normal_stiffness: T, effective_mass: T, damping
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct BodyState<T> {
     /// Centre (reference point of the angular velocity).
-    pub position: [T; 2],
+    pub position: Vector<T>,
     /// Velocity of the centre.
-    pub velocity: [T; 2],
+    pub velocity: Vector<T>,
     /// Angular velocity (counter-clockwise positive).
     pub angular_velocity: T,
 }
@@ -135,27 +135,24 @@ impl<T: Real> BodyState<T> {
         let half = T::lit(0.5) * dt;
         BodyState {
             position: p.position,
-            velocity: add(p.velocity, scale(p.acceleration, half)),
+            velocity: (p.velocity + (p.acceleration * half)),
             angular_velocity: p.angular_velocity + p.angular_acceleration * half,
         }
     }
 
     /// A fixed body (a wall) with reference point `position`.
-    pub fn fixed(position: [T; 2]) -> Self {
+    pub fn fixed(position: Vector<T>) -> Self {
         BodyState {
             position,
-            velocity: [T::zero(); 2],
+            velocity: Vector::zeros(),
             angular_velocity: T::zero(),
         }
     }
 
     /// Velocity of the material point at `x`: v + ω × (x − c).
     #[inline(always)]
-    pub fn velocity_at(&self, x: [T; 2]) -> [T; 2] {
-        add(
-            self.velocity,
-            spin(self.angular_velocity, sub(x, self.position)),
-        )
+    pub fn velocity_at(&self, x: Vector<T>) -> Vector<T> {
+        self.velocity + (spin(self.angular_velocity, &(x - self.position)))
     }
 }
 
@@ -163,9 +160,9 @@ impl<T: Real> BodyState<T> {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ContactForce<T> {
     /// Force on body i (= −`force_on_j`).
-    pub force_on_i: [T; 2],
+    pub force_on_i: Vector<T>,
     /// Force on body j.
-    pub force_on_j: [T; 2],
+    pub force_on_j: Vector<T>,
     /// Torque on body i about its centre.
     pub torque_on_i: T,
     /// Torque on body j about its centre.
@@ -185,8 +182,8 @@ impl<T: Real> ContactForce<T> {
     /// No force.
     pub fn zero() -> Self {
         ContactForce {
-            force_on_i: [T::zero(); 2],
-            force_on_j: [T::zero(); 2],
+            force_on_i: Vector::zeros(),
+            force_on_j: Vector::zeros(),
             torque_on_i: T::zero(),
             torque_on_j: T::zero(),
             normal_force: T::zero(),
@@ -213,14 +210,14 @@ pub fn linear_contact_force<T: Real>(
         return ContactForce::zero();
     }
     let n = contact.normal;
-    let t = perp(n);
+    let t = perp(&n);
     let x = contact.point;
-    let v = sub(body_j.velocity_at(x), body_i.velocity_at(x));
-    let mut normal_force = law.normal_stiffness * contact.overlap - law.normal_damping * dot(v, n);
+    let v = body_j.velocity_at(x) - body_i.velocity_at(x);
+    let mut normal_force = law.normal_stiffness * contact.overlap - law.normal_damping * v.dot(&n);
     if law.no_tension && (normal_force.is_nan() || normal_force <= T::zero()) {
         normal_force = T::zero();
     }
-    let trial = *shear - law.shear_stiffness * dot(v, t) * dt;
+    let trial = *shear - law.shear_stiffness * v.dot(&t) * dt;
     let cap = law.friction * normal_force.max(T::zero());
     let (shear_force, sliding) = if trial.abs() > cap {
         (cap.copysign(trial), true)
@@ -228,13 +225,13 @@ pub fn linear_contact_force<T: Real>(
         (trial, false)
     };
     *shear = shear_force;
-    let force_on_j = add(scale(n, normal_force), scale(t, shear_force));
-    let force_on_i = [-force_on_j[0], -force_on_j[1]];
+    let force_on_j = (n * normal_force) + (t * shear_force);
+    let force_on_i = -force_on_j;
     ContactForce {
         force_on_i,
         force_on_j,
-        torque_on_i: cross(sub(x, body_i.position), force_on_i),
-        torque_on_j: cross(sub(x, body_j.position), force_on_j),
+        torque_on_i: cross(&(x - body_i.position), &force_on_i),
+        torque_on_j: cross(&(x - body_j.position), &force_on_j),
         normal_force,
         shear_force,
         sliding,

@@ -5,7 +5,7 @@
 //! friction, Cundall & Strack 1979), bonds (the point bond of eq. 6.13 and the Potyondy & Cundall 2004 parallel
 //! bond) and an explicit central-difference integrator with PFC local damping.
 //!
-//! * [`vector`]: the few 2-D vector operations everything else uses (plain `[T; 2]`).
+//! Vectors, positions and rotations are those of the kernels' [`math`](crate::math) module (nalgebra).
 //! * [`shape`]: [`shape::Shape`] (disc, ellipse), [`shape::Wall`] (half-plane), [`shape::Particle`].
 //! * [`contact`]: narrow-phase detection returning contact point, unit normal (from i to j) and signed overlap;
 //!   ellipse pairs by maximising the separating-axis gap over the normal angle (exact support functions).
@@ -39,4 +39,3 @@ pub mod integrate;
 pub mod law;
 pub mod servo;
 pub mod shape;
-pub mod vector;

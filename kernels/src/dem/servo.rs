@@ -13,6 +13,13 @@ use crate::Real;
 /// The servo law of one wall.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(
+    feature = "serde",
+    serde(bound(
+        serialize = "T: crate::Real + serde::Serialize",
+        deserialize = "T: crate::Real + serde::Deserialize<'de>"
+    ))
+)]
 pub struct ServoLaw<T> {
     /// Stress to hold (compression positive).
     pub target_stress: T,

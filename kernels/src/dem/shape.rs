@@ -16,12 +16,19 @@
 //!
 //! Units: any consistent system (lengths, masses, times chosen by the caller). Support values use a plain
 //! √(x² + y²) (not `hypot`, which is several times slower): lengths must stay below ~1e150 (f64) / 1e18 (f32).
-use super::vector::{add, dot, scale};
+use crate::math::Vector;
 use crate::Real;
 
 /// The shape of a particle, in its body frame.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(
+    feature = "serde",
+    serde(bound(
+        serialize = "T: crate::Real + serde::Serialize",
+        deserialize = "T: crate::Real + serde::Deserialize<'de>"
+    ))
+)]
 pub enum Shape<T> {
     /// A disc of the given radius (> 0).
     Disc {
@@ -76,13 +83,20 @@ impl<T: Real> Shape<T> {
 /// Plain-data state of one rigid particle.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(
+    feature = "serde",
+    serde(bound(
+        serialize = "T: crate::Real + serde::Serialize",
+        deserialize = "T: crate::Real + serde::Deserialize<'de>"
+    ))
+)]
 pub struct Particle<T> {
     /// Centre of mass.
-    pub position: [T; 2],
+    pub position: Vector<T>,
     /// Orientation of the body x axis (radians, counter-clockwise from +x).
     pub angle: T,
     /// Translational velocity (in the central-difference scheme, the mid-step velocity v(t − Δt/2)).
-    pub velocity: [T; 2],
+    pub velocity: Vector<T>,
     /// Angular velocity (counter-clockwise positive; mid-step like `velocity`).
     pub angular_velocity: T,
     /// Mass (> 0).
@@ -93,35 +107,41 @@ pub struct Particle<T> {
     pub shape: Shape<T>,
     /// The translational acceleration applied by the last integration step (zero initially); used to
     /// estimate the velocity at the force time for velocity-dependent forces.
-    pub acceleration: [T; 2],
+    pub acceleration: Vector<T>,
     /// The angular acceleration applied by the last integration step.
     pub angular_acceleration: T,
 }
 
 impl<T: Real> Particle<T> {
     /// A particle at rest with mass and inertia of a uniform lamina of areal density `density`.
-    pub fn new(position: [T; 2], angle: T, shape: Shape<T>, density: T) -> Self {
+    pub fn new(position: Vector<T>, angle: T, shape: Shape<T>, density: T) -> Self {
         let mass = density * shape.area();
         Particle {
             position,
             angle,
-            velocity: [T::zero(); 2],
+            velocity: Vector::zeros(),
             angular_velocity: T::zero(),
             mass,
             moment_of_inertia: mass * shape.inertia_per_mass(),
             shape,
-            acceleration: [T::zero(); 2],
+            acceleration: Vector::zeros(),
             angular_acceleration: T::zero(),
         }
     }
 
     /// A disc at rest.
-    pub fn disc(position: [T; 2], radius: T, density: T) -> Self {
+    pub fn disc(position: Vector<T>, radius: T, density: T) -> Self {
         Self::new(position, T::zero(), Shape::Disc { radius }, density)
     }
 
     /// An ellipse at rest with semi-axes `semi_major` (along the body x axis, at `angle`) and `semi_minor`.
-    pub fn ellipse(position: [T; 2], angle: T, semi_major: T, semi_minor: T, density: T) -> Self {
+    pub fn ellipse(
+        position: Vector<T>,
+        angle: T,
+        semi_major: T,
+        semi_minor: T,
+        density: T,
+    ) -> Self {
         Self::new(
             position,
             angle,
@@ -145,7 +165,7 @@ impl<T: Real> Particle<T> {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Placed<T> {
     /// Centre.
-    pub centre: [T; 2],
+    pub centre: Vector<T>,
     /// Semi-axis along the body x axis.
     pub a: T,
     /// Semi-axis along the body y axis.
@@ -159,7 +179,7 @@ pub struct Placed<T> {
 impl<T: Real> Placed<T> {
     /// Place an ellipse (a disc when a = b).
     #[inline(always)]
-    pub fn new(centre: [T; 2], angle: T, a: T, b: T) -> Self {
+    pub fn new(centre: Vector<T>, angle: T, a: T, b: T) -> Self {
         Placed {
             centre,
             a,
@@ -171,7 +191,7 @@ impl<T: Real> Placed<T> {
 
     /// Components (n·u, n·v) of a direction in the body axes.
     #[inline(always)]
-    fn body(&self, n: [T; 2]) -> (T, T) {
+    fn body(&self, n: Vector<T>) -> (T, T) {
         (
             self.cos * n[0] + self.sin * n[1],
             -self.sin * n[0] + self.cos * n[1],
@@ -180,14 +200,14 @@ impl<T: Real> Placed<T> {
 
     /// Support value h(n) for a unit direction n.
     #[inline(always)]
-    pub fn support_value(&self, n: [T; 2]) -> T {
+    pub fn support_value(&self, n: Vector<T>) -> T {
         let (p, q) = self.body(n);
         ((self.a * p) * (self.a * p) + (self.b * q) * (self.b * q)).sqrt()
     }
 
     /// Support value h, its derivative dh/dθ and the radius of curvature a²b²/h³ for n = (cos θ, sin θ).
     #[inline(always)]
-    pub fn support_derivatives(&self, n: [T; 2]) -> (T, T, T) {
+    pub fn support_derivatives(&self, n: Vector<T>) -> (T, T, T) {
         let (p, q) = self.body(n);
         let h = ((self.a * p) * (self.a * p) + (self.b * q) * (self.b * q)).sqrt();
         let (a2, b2) = (self.a * self.a, self.b * self.b);
@@ -199,20 +219,20 @@ impl<T: Real> Placed<T> {
 
     /// The support point (world coordinates) in the unit direction n: the boundary point with outward normal n.
     #[inline(always)]
-    pub fn support_point(&self, n: [T; 2]) -> [T; 2] {
+    pub fn support_point(&self, n: Vector<T>) -> Vector<T> {
         let (p, q) = self.body(n);
         let (a2, b2) = (self.a * self.a, self.b * self.b);
         let h = ((self.a * p) * (self.a * p) + (self.b * q) * (self.b * q)).sqrt();
         let (x, y) = (a2 * p / h, b2 * q / h);
         // back to world axes: x u + y v
-        let off = [self.cos * x - self.sin * y, self.sin * x + self.cos * y];
-        add(self.centre, off)
+        let off = Vector::new(self.cos * x - self.sin * y, self.sin * x + self.cos * y);
+        self.centre + off
     }
 
     /// Whether a world point lies inside or on the shape: (x·u/a)² + (x·v/b)² ≤ 1.
     #[inline(always)]
-    pub fn contains(&self, x: [T; 2]) -> bool {
-        let d = [x[0] - self.centre[0], x[1] - self.centre[1]];
+    pub fn contains(&self, x: Vector<T>) -> bool {
+        let d = x - self.centre;
         let (p, q) = self.body(d);
         let (p, q) = (p / self.a, q / self.b);
         p * p + q * q <= T::one()
@@ -222,33 +242,40 @@ impl<T: Real> Placed<T> {
 /// A fixed straight wall: the half-plane behind the line through `point` with unit outward normal `normal`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(
+    feature = "serde",
+    serde(bound(
+        serialize = "T: crate::Real + serde::Serialize",
+        deserialize = "T: crate::Real + serde::Deserialize<'de>"
+    ))
+)]
 pub struct Wall<T> {
     /// A point on the wall surface.
-    pub point: [T; 2],
+    pub point: Vector<T>,
     /// Unit outward normal (pointing from the wall into the particle region).
-    pub normal: [T; 2],
+    pub normal: Vector<T>,
 }
 
 impl<T: Real> Wall<T> {
     /// A wall through `point` with the outward normal at `angle` (radians).
-    pub fn from_angle(point: [T; 2], angle: T) -> Self {
+    pub fn from_angle(point: Vector<T>, angle: T) -> Self {
         Wall {
             point,
-            normal: [angle.portable_cos(), angle.portable_sin()],
+            normal: Vector::new(angle.portable_cos(), angle.portable_sin()),
         }
     }
 
     /// Signed distance of `x` from the wall surface (positive on the particle side).
     #[inline(always)]
-    pub fn signed_distance(&self, x: [T; 2]) -> T {
-        dot([x[0] - self.point[0], x[1] - self.point[1]], self.normal)
+    pub fn signed_distance(&self, x: Vector<T>) -> T {
+        (x - self.point).dot(&self.normal)
     }
 
     /// The foot of the perpendicular from `x` onto the wall surface.
     #[inline(always)]
-    pub fn project(&self, x: [T; 2]) -> [T; 2] {
+    pub fn project(&self, x: Vector<T>) -> Vector<T> {
         let s = self.signed_distance(x);
-        add(x, scale(self.normal, -s))
+        x + (self.normal * (-s))
     }
 }
 
@@ -257,21 +284,21 @@ impl<T: Real> Wall<T> {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct WallSegment<T> {
     /// First end point.
-    pub start: [T; 2],
+    pub start: Vector<T>,
     /// Second end point.
-    pub end: [T; 2],
+    pub end: Vector<T>,
 }
 
 impl<T: Real> WallSegment<T> {
     /// The supporting half-plane (its wall) and the segment length. A zero-length segment gives the normal
     /// (0, 1) and length 0.
     pub fn wall(&self) -> (Wall<T>, T) {
-        let e = [self.end[0] - self.start[0], self.end[1] - self.start[1]];
+        let e = self.end - self.start;
         let length = e[0].portable_hypot(e[1]);
         let normal = if length > T::zero() {
-            [-e[1] / length, e[0] / length]
+            Vector::new(-e[1] / length, e[0] / length)
         } else {
-            [T::zero(), T::one()]
+            Vector::new(T::zero(), T::one())
         };
         (
             Wall {
@@ -283,9 +310,9 @@ impl<T: Real> WallSegment<T> {
     }
 
     /// Position of the projection of `x` along the segment, from 0 at `start` to the length at `end`.
-    pub fn abscissa(&self, x: [T; 2]) -> T {
+    pub fn abscissa(&self, x: Vector<T>) -> T {
         let (wall, _) = self.wall();
-        let tangent = [wall.normal[1], -wall.normal[0]];
-        dot([x[0] - self.start[0], x[1] - self.start[1]], tangent)
+        let tangent = Vector::new(wall.normal[1], -wall.normal[0]);
+        (x - self.start).dot(&tangent)
     }
 }

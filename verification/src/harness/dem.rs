@@ -63,14 +63,16 @@ pub fn counting_sort_is_a_permutation(c: &mut dyn Chooser) {
     let nx = c.usize_in(1, 3);
     let ny = c.usize_in(1, 3);
     let n = c.usize_in(0, MAX_N);
-    let mut positions = [[0.0f64; 2]; MAX_N];
+    let mut positions = [lbdem_kernels::math::vector(0.0f64, 0.0); MAX_N];
     for p in positions.iter_mut().take(n) {
         p[0] = c.float_from(&COORDINATES);
         p[1] = c.float_from(&COORDINATES);
     }
     let positions = &positions[..n];
-    let grid = CellGrid::new([0.0, 0.0], 1.0, nx, ny).expect("valid grid");
-    let oracle = |p: [f64; 2]| (expected_cell(p[0], nx), expected_cell(p[1], ny));
+    let grid =
+        CellGrid::new(lbdem_kernels::math::vector(0.0, 0.0), 1.0, nx, ny).expect("valid grid");
+    let oracle =
+        |p: lbdem_kernels::math::Vector<f64>| (expected_cell(p[0], nx), expected_cell(p[1], ny));
     let cells = grid.cell_count();
     let mut start = [0usize; 10];
     let mut order = [usize::MAX; MAX_N];

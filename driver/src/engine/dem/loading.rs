@@ -206,9 +206,9 @@ pub fn carve_disc<T: Real>(
         })
         .map(|p| {
             let mut p = *p;
-            p.velocity = [T::zero(); 2];
+            p.velocity = lbdem_kernels::math::Vector::from([T::zero(); 2]);
             p.angular_velocity = T::zero();
-            p.acceleration = [T::zero(); 2];
+            p.acceleration = lbdem_kernels::math::Vector::from([T::zero(); 2]);
             p.angular_acceleration = T::zero();
             p
         })
@@ -233,8 +233,18 @@ pub fn run_brazilian<T: Real>(
     let width = hi[0] - lo[0];
     let (o, l) = (T::zero(), T::one());
     let fixed = PlatenControl::Speed(T::zero());
-    let bottom = world.add_platen(super::world::Platen::new(lo, [o, l], width, fixed));
-    let top = world.add_platen(super::world::Platen::new(hi, [o, -l], width, fixed));
+    let bottom = world.add_platen(super::world::Platen::new(
+        lo,
+        lbdem_kernels::math::vector(o, l),
+        width,
+        fixed,
+    ));
+    let top = world.add_platen(super::world::Platen::new(
+        hi,
+        lbdem_kernels::math::vector(o, -l),
+        width,
+        fixed,
+    ));
     world.platens[bottom].control = PlatenControl::Speed(test.platen_speed);
     world.platens[top].control = PlatenControl::Speed(test.platen_speed);
     let gap = |w: &DemWorld<T>| {

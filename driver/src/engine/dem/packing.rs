@@ -39,6 +39,7 @@
 //! Units: consistent (cgs in the scenes: cm, g/cm² areal density, dyne/cm stress per unit thickness).
 use lbdem_kernels::dem::assembly::ContactModel;
 use lbdem_kernels::dem::shape::{Particle, Shape};
+use lbdem_kernels::math::Vector;
 use lbdem_kernels::Real;
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -54,9 +55,9 @@ pub const FILL_FRACTION: f64 = 0.3;
 /// Zero every velocity and stored acceleration (PFC's "calm").
 fn calm<T: Real>(world: &mut DemWorld<T>) {
     for p in world.particles.iter_mut() {
-        p.velocity = [T::zero(); 2];
+        p.velocity = lbdem_kernels::math::Vector::from([T::zero(); 2]);
         p.angular_velocity = T::zero();
-        p.acceleration = [T::zero(); 2];
+        p.acceleration = lbdem_kernels::math::Vector::from([T::zero(); 2]);
         p.angular_acceleration = T::zero();
     }
 }
@@ -293,7 +294,12 @@ pub fn fill_box<T: Real>(spec: &PackingSpec<T>) -> Result<(Vec<Particle<T>>, T)>
         } else {
             Shape::Disc { radius: a }
         };
-        particles.push(Particle::new(pos, angle, shape, spec.density));
+        particles.push(Particle::new(
+            lbdem_kernels::math::Vector::from(pos),
+            angle,
+            shape,
+            spec.density,
+        ));
     }
     Ok((particles, s))
 }
@@ -328,8 +334,8 @@ pub fn generate_packing<T: Real>(
     };
     let mut world = DemWorld::new(full, packing_contact, spec.timestep)?;
     let sample_box = world.add_box(
-        [T::zero(); 2],
-        [spec.width, spec.height],
+        Vector::zeros(),
+        Vector::new(spec.width, spec.height),
         PlatenControl::Speed(T::zero()),
     );
     // Grow until the mean wall stress reaches the target (or full size); the rate slows as the stress
@@ -462,9 +468,15 @@ pub fn hexagonal_packing<T: Real>(
                 radius * aspect_ratio + T::lit(row as f64) * dy,
             ];
             out.push(if aspect_ratio < T::one() {
-                Particle::ellipse(pos, T::zero(), a, a * aspect_ratio, density)
+                Particle::ellipse(
+                    lbdem_kernels::math::Vector::from(pos),
+                    T::zero(),
+                    a,
+                    a * aspect_ratio,
+                    density,
+                )
             } else {
-                Particle::disc(pos, a, density)
+                Particle::disc(lbdem_kernels::math::Vector::from(pos), a, density)
             });
         }
     }

@@ -219,7 +219,12 @@ impl<T: Real> BoundaryStressRun<T> {
             };
         }
         let top = w.boundary_particles(3, test.boundary_depth);
-        w.apply_boundary_stress(&top, [T::zero(), -T::one()], test.axial_stress, width);
+        w.apply_boundary_stress(
+            &top,
+            lbdem_kernels::math::vector(T::zero(), -T::one()),
+            test.axial_stress,
+            width,
+        );
         let mut run = BoundaryStressRun {
             test,
             sample_box: b,

@@ -38,6 +38,7 @@ use lbdem_kernels::dem::grid::{build_cell_grid, candidate_pairs, carry_contact_h
 use lbdem_kernels::dem::law::ContactForce;
 use lbdem_kernels::dem::servo::ServoLaw;
 use lbdem_kernels::dem::shape::{Particle, Wall};
+use lbdem_kernels::math::Vector;
 use lbdem_kernels::Real;
 use rayon::prelude::*;
 
@@ -81,13 +82,17 @@ pub enum BondSpec<T> {
 
 /// One broken bond.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(bound(
+    serialize = "T: Real + Serialize",
+    deserialize = "T: Real + Deserialize<'de>"
+))]
 pub struct BreakRecord<T> {
     /// Step in which it broke (the world's step counter before the step).
     pub step: u64,
     /// The bonded pair.
     pub pair: [usize; 2],
     /// Where the bond was.
-    pub position: [T; 2],
+    pub position: Vector<T>,
     /// Tension, shear or compression.
     pub mode: BreakMode,
     /// Angle of the bond normal (radians from +x).
@@ -115,6 +120,10 @@ pub enum PlatenControl<T> {
 
 /// A straight rigid wall that may move along its normal.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(bound(
+    serialize = "T: Real + Serialize",
+    deserialize = "T: Real + Deserialize<'de>"
+))]
 pub struct Platen<T> {
     /// Position and unit normal (pointing into the sample).
     pub wall: Wall<T>,
@@ -127,21 +136,21 @@ pub struct Platen<T> {
     /// Normal speed used in the last step (positive into the sample).
     pub speed: T,
     /// Total force the particles exerted on the platen in the last step.
-    pub reaction: [T; 2],
+    pub reaction: Vector<T>,
     /// Active particle contacts in the last step.
     pub contacts: usize,
 }
 
 impl<T: Real> Platen<T> {
     /// A platen through `point` with inward normal `normal`, loaded length `length`.
-    pub fn new(point: [T; 2], normal: [T; 2], length: T, control: PlatenControl<T>) -> Self {
+    pub fn new(point: Vector<T>, normal: Vector<T>, length: T, control: PlatenControl<T>) -> Self {
         Platen {
             wall: Wall { point, normal },
             control,
             length,
             active: true,
             speed: T::zero(),
-            reaction: [T::zero(); 2],
+            reaction: Vector::zeros(),
             contacts: 0,
         }
     }
@@ -173,7 +182,10 @@ pub struct SampleBox {
 /// history, and the last step's force and torque sums and contact statistics (read by
 /// [`DemWorld::unbalanced_force_ratio`]). The skipped buffers are scratch, rebuilt by every step.
 #[derive(Clone, Debug, Serialize, Deserialize)]
-#[serde(bound(serialize = "T: Serialize", deserialize = "T: Deserialize<'de>"))]
+#[serde(bound(
+    serialize = "T: Real + Serialize",
+    deserialize = "T: Real + Deserialize<'de>"
+))]
 pub struct DemWorld<T> {
     /// Particles.
     pub particles: Vec<Particle<T>>,
@@ -188,9 +200,9 @@ pub struct DemWorld<T> {
     /// PFC local damping α.
     pub local_damping: T,
     /// Gravity (acceleration).
-    pub gravity: [T; 2],
+    pub gravity: Vector<T>,
     /// Applied force per particle (e.g. the axial stress through boundary particles).
-    pub external_force: Vec<[T; 2]>,
+    pub external_force: Vec<Vector<T>>,
     /// Applied torque on each particle (e.g. the fluid torque of the coupling, eq. 4.8), added every step.
     pub external_torque: Vec<T>,
     /// Particles held in place (not integrated: zero velocity, fixed position and angle), e.g. supports.
@@ -206,7 +218,7 @@ pub struct DemWorld<T> {
     #[serde(skip)]
     radii: Vec<T>,
     #[serde(skip)]
-    positions: Vec<[T; 2]>,
+    positions: Vec<Vector<T>>,
     #[serde(skip)]
     cell_start: Vec<usize>,
     #[serde(skip)]
@@ -227,7 +239,7 @@ pub struct DemWorld<T> {
     wall_forces: Vec<WallContactForce<T>>,
     #[serde(skip)]
     wall_loads: Vec<WallLoad<T>>,
-    force: Vec<[T; 2]>,
+    force: Vec<Vector<T>>,
     torque: Vec<T>,
     wall_shear: Vec<T>,
 }
@@ -262,8 +274,8 @@ impl<T: Real> DemWorld<T> {
             bonds: Vec::new(),
             model,
             local_damping: T::lit(lbdem_kernels::dem::law::DEFAULT_LOCAL_DAMPING),
-            gravity: [T::zero(); 2],
-            external_force: vec![[T::zero(); 2]; n],
+            gravity: Vector::zeros(),
+            external_force: vec![Vector::zeros(); n],
             external_torque: vec![T::zero(); n],
             held: vec![false; n],
             breaks: Vec::new(),
@@ -338,8 +350,10 @@ impl<T: Real> DemWorld<T> {
         let mut count = vec![0u32; n];
         for (&[i, j], f) in self.pairs.iter().zip(&self.contact_forces) {
             if f.normal_force > T::zero() || f.shear_force != T::zero() {
-                add_to(&mut force[i], f.force_on_i);
-                add_to(&mut force[j], f.force_on_j);
+                for (k, sum) in [(i, f.force_on_i), (j, f.force_on_j)] {
+                    force[k][0] += sum[0];
+                    force[k][1] += sum[1];
+                }
                 count[i] += 1;
                 count[j] += 1;
             }
@@ -377,14 +391,39 @@ impl<T: Real> DemWorld<T> {
 
     /// Enclose the particles in four platens at x ∈ [x0, x1], y ∈ [y0, y1], all with the same control;
     /// returns the box (also stored in [`DemWorld::sample_box`]).
-    pub fn add_box(&mut self, lo: [T; 2], hi: [T; 2], control: PlatenControl<T>) -> SampleBox {
+    pub fn add_box(
+        &mut self,
+        lo: Vector<T>,
+        hi: Vector<T>,
+        control: PlatenControl<T>,
+    ) -> SampleBox {
         let (w, h) = (hi[0] - lo[0], hi[1] - lo[1]);
         let (o, l) = (T::zero(), T::one());
         let b = SampleBox {
-            left: self.add_platen(Platen::new(lo, [l, o], h, control)),
-            right: self.add_platen(Platen::new(hi, [-l, o], h, control)),
-            bottom: self.add_platen(Platen::new(lo, [o, l], w, control)),
-            top: self.add_platen(Platen::new(hi, [o, -l], w, control)),
+            left: self.add_platen(Platen::new(
+                lo,
+                lbdem_kernels::math::vector(l, o),
+                h,
+                control,
+            )),
+            right: self.add_platen(Platen::new(
+                hi,
+                lbdem_kernels::math::vector(-l, o),
+                h,
+                control,
+            )),
+            bottom: self.add_platen(Platen::new(
+                lo,
+                lbdem_kernels::math::vector(o, l),
+                w,
+                control,
+            )),
+            top: self.add_platen(Platen::new(
+                hi,
+                lbdem_kernels::math::vector(o, -l),
+                w,
+                control,
+            )),
         };
         self.sample_box = Some(b);
         b
@@ -432,7 +471,12 @@ impl<T: Real> DemWorld<T> {
                     } else {
                         [T::one(), T::zero()]
                     };
-                    let radii = [pi.placed().support_value(n), pj.placed().support_value(n)];
+                    let radii = [
+                        pi.placed()
+                            .support_value(lbdem_kernels::math::Vector::from(n)),
+                        pj.placed()
+                            .support_value(lbdem_kernels::math::Vector::from(n)),
+                    ];
                     BondLaw::Parallel {
                         bond: ParallelBond::new(
                             radii[0],
@@ -488,7 +532,7 @@ impl<T: Real> DemWorld<T> {
     }
 
     /// Axis-aligned bounding box of the particles (their bounding circles).
-    pub fn bounds(&self) -> ([T; 2], [T; 2]) {
+    pub fn bounds(&self) -> (Vector<T>, Vector<T>) {
         let mut lo = [T::infinity(); 2];
         let mut hi = [T::neg_infinity(); 2];
         for p in &self.particles {
@@ -498,7 +542,10 @@ impl<T: Real> DemWorld<T> {
                 hi[k] = hi[k].max(p.position[k] + r);
             }
         }
-        (lo, hi)
+        (
+            lbdem_kernels::math::Vector::from(lo),
+            lbdem_kernels::math::Vector::from(hi),
+        )
     }
 
     fn broad_phase(&mut self) {
@@ -521,7 +568,7 @@ impl<T: Real> DemWorld<T> {
         let cell = T::lit(2.0) * r_max + self.margin;
         // Bounds are finite for finite positions; a non-finite grid falls back to one cell (the kernel clamps).
         let grid = CellGrid::covering(lo, hi, cell, MAX_CELLS_PER_AXIS)
-            .or_else(|_| CellGrid::new([T::zero(); 2], T::one(), 1, 1))
+            .or_else(|_| CellGrid::new(Vector::zeros(), T::one(), 1, 1))
             .expect("a 1 x 1 grid of unit cells is valid");
         self.cell_start.resize(grid.cell_start_len(), 0);
         self.cell_particles.resize(n, 0);
@@ -568,7 +615,7 @@ impl<T: Real> DemWorld<T> {
         let dt = self.dt;
         self.broad_phase();
         self.force.clear();
-        self.force.resize(n, [T::zero(); 2]);
+        self.force.resize(n, Vector::zeros());
         self.torque.clear();
         self.torque.resize(n, T::zero());
         let model = self.model;
@@ -637,7 +684,10 @@ impl<T: Real> DemWorld<T> {
             self.wall_bodies
                 .extend(self.platens.iter().map(|pl| WallBody {
                     wall: pl.wall,
-                    velocity: [pl.wall.normal[0] * pl.speed, pl.wall.normal[1] * pl.speed],
+                    velocity: lbdem_kernels::math::vector(
+                        pl.wall.normal[0] * pl.speed,
+                        pl.wall.normal[1] * pl.speed,
+                    ),
                     active: pl.active,
                 }));
             self.wall_forces.resize(n * walls, WallContactForce::none());
@@ -660,7 +710,7 @@ impl<T: Real> DemWorld<T> {
             }
         }
         for (f, e) in self.force.iter_mut().zip(&self.external_force) {
-            add_to(f, *e);
+            *f += *e;
         }
         for (t, e) in self.torque.iter_mut().zip(&self.external_torque) {
             *t += *e;
@@ -734,7 +784,7 @@ impl<T: Real> DemWorld<T> {
     pub fn apply_boundary_stress(
         &mut self,
         indices: &[usize],
-        direction: [T; 2],
+        direction: Vector<T>,
         stress: T,
         length: T,
     ) {
@@ -747,7 +797,8 @@ impl<T: Real> DemWorld<T> {
         }
         for &i in indices {
             let share = stress * length * self.particles[i].shape.bounding_radius() / total;
-            self.external_force[i] = [direction[0] * share, direction[1] * share];
+            self.external_force[i] =
+                lbdem_kernels::math::vector(direction[0] * share, direction[1] * share);
         }
     }
 
@@ -770,10 +821,4 @@ impl<T: Real> DemWorld<T> {
             .map(|(i, _)| i)
             .collect()
     }
-}
-
-#[inline(always)]
-fn add_to<T: Real>(a: &mut [T; 2], b: [T; 2]) {
-    a[0] += b[0];
-    a[1] += b[1];
 }

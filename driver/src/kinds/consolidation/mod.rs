@@ -165,7 +165,7 @@ fn start(case: &Case<Consolidation>, exec: &Exec) -> Result<ConsolidationState> 
     )?;
     for &i in &tops {
         let share = c.load * width * world.dem.particles[i].shape.bounding_radius() / total_r;
-        world.applied[i] = ([0.0, -share], 0.0);
+        world.applied[i] = (lbdem_kernels::math::vector(0.0, -share), 0.0);
     }
     let steps = u.time_to_steps(c.duration).round().max(10.0) as u64;
     Ok(ConsolidationState {

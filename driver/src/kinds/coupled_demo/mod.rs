@@ -113,9 +113,9 @@ impl DemoScene {
             .iter()
             .enumerate()
             .map(|(k, &c)| {
-                let mut p = Particle::disc(c, d.radius, 2.0);
+                let mut p = Particle::disc(lbdem_kernels::math::Vector::from(c), d.radius, 2.0);
                 let sign = if k % 2 == 0 { 1.0 } else { -1.0 };
-                p.velocity = [sign * d.speed, 0.5 * d.speed];
+                p.velocity = lbdem_kernels::math::vector(sign * d.speed, 0.5 * d.speed);
                 p.angular_velocity = sign * d.speed / d.radius;
                 p
             })

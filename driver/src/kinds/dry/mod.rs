@@ -216,6 +216,10 @@ pub struct DrySetup {
 
 /// The loading stage in progress.
 #[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(bound(
+    serialize = "T: lbdem_kernels::Real + Serialize",
+    deserialize = "T: lbdem_kernels::Real + Deserialize<'de>"
+))]
 pub enum Stage<T> {
     /// Uniaxial or biaxial compression.
     Compression(CompressionRun<T>),
@@ -226,6 +230,10 @@ pub enum Stage<T> {
 /// A dry run in precision `T`: the world, the loading stage, the packing facts for the summary and the output
 /// counters.
 #[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(bound(
+    serialize = "T: lbdem_kernels::Real + Serialize",
+    deserialize = "T: lbdem_kernels::Real + Deserialize<'de>"
+))]
 pub struct DryRun<T> {
     /// The assembly.
     pub world: DemWorld<T>,

@@ -90,8 +90,8 @@ pub struct CompressibilityOutcome {
 /// The piston as the fluid sees it: a very flat ellipse at `face`, moving at `v` (lattice units).
 fn piston(face: f64, v: f64, ny: usize) -> CoupledBody<f64> {
     CoupledBody {
-        center: [face + PISTON_HALF_THICKNESS, 0.5 * (ny - 1) as f64],
-        velocity: [v, 0.0],
+        center: lbdem_kernels::math::vector(face + PISTON_HALF_THICKNESS, 0.5 * (ny - 1) as f64),
+        velocity: lbdem_kernels::math::vector(v, 0.0),
         spin: 0.0,
         shape: BodyShape::Ellipse {
             semi_major: 50.0 * ny as f64,

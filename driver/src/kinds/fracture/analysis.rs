@@ -42,7 +42,7 @@ impl BreakRow {
         let normal = axial_deg(b.orientation.to_degrees());
         Self {
             time: b.step.saturating_sub(drop_step) as f64 * dt,
-            position: b.position,
+            position: b.position.into(),
             normal_deg: normal,
             crack_deg: axial_deg(normal + 90.0),
             mode: match b.mode {

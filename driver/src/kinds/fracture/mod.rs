@@ -905,7 +905,7 @@ impl<'a, S: std::ops::Deref<Target = FractureState>> FractureRun<'a, S> {
         let mut lattice = self.fixed_grain_lattice(1.0 + 0.5 * drho, 1.0 - 0.5 * drho)?;
         let mut bodies = fp.world.bodies();
         for b in &mut bodies {
-            b.velocity = [0.0; 2];
+            b.velocity = lbdem_kernels::math::Vector::from([0.0; 2]);
             b.spin = 0.0;
         }
         lattice.cover_with_bodies(&bodies, fp.world.weighting);
@@ -1211,7 +1211,7 @@ impl<'a, S: std::ops::DerefMut<Target = FractureState>> FractureRun<'a, S> {
         match &mut state.coupled {
             Some(w) => {
                 // The applied loads live in `applied` for the coupled world.
-                let mut scratch = vec![[0.0; 2]; w.dem.particles.len()];
+                let mut scratch = vec![lbdem_kernels::math::Vector::zeros(); w.dem.particles.len()];
                 spread_axial(&w.dem, ends, l.axial_stress_after, height, &mut scratch);
                 for (a, f) in w.applied.iter_mut().zip(scratch) {
                     a.0 = f;
@@ -1679,7 +1679,7 @@ fn spread_axial(
     ends: &[Vec<usize>; 2],
     stress: f64,
     height: f64,
-    forces: &mut [[f64; 2]],
+    forces: &mut [lbdem_kernels::math::Vector<f64>],
 ) {
     for (side, dir) in [(0usize, 1.0), (1, -1.0)] {
         let ids = &ends[side];
@@ -1692,13 +1692,13 @@ fn spread_axial(
         }
         for &i in ids {
             let share = stress * height * w.particles[i].shape.bounding_radius() / total;
-            forces[i] = [dir * share, 0.0];
+            forces[i] = lbdem_kernels::math::vector(dir * share, 0.0);
         }
     }
 }
 
 fn apply_axial(w: &mut DemWorld<f64>, ends: &[Vec<usize>; 2], stress: f64, height: f64) {
-    let mut forces = vec![[0.0; 2]; w.particles.len()];
+    let mut forces = vec![lbdem_kernels::math::Vector::zeros(); w.particles.len()];
     spread_axial(w, ends, stress, height, &mut forces);
     w.external_force = forces;
 }

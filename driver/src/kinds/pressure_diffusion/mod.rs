@@ -182,8 +182,8 @@ fn start(case: &Case<PressureDiffusion>, exec: &Exec) -> Result<DiffusionState> 
         .particles
         .iter()
         .map(|p| CoupledBody {
-            center: [map_x(p.position[0]), map_y(p.position[1])],
-            velocity: [0.0; 2],
+            center: lbdem_kernels::math::vector(map_x(p.position[0]), map_y(p.position[1])),
+            velocity: lbdem_kernels::math::Vector::from([0.0; 2]),
             spin: 0.0,
             shape: BodyShape::Disc {
                 radius: p.shape.bounding_radius() / h * d.fluid_radius,

@@ -176,7 +176,7 @@ fn start(case: &Case<TerminalVelocity>, exec: &Exec) -> Result<TerminalState> {
     // inputs having been converted above by LatticeUnits).
     let center = [0.5 * l - 0.25, 0.5 * l + 0.15];
     let density = t.grain_density / case.scene.fluid.density; // areal density relative to ρ₀ (lattice mass / node)
-    let disc = Particle::disc(center, radius, density);
+    let disc = Particle::disc(lbdem_kernels::math::Vector::from(center), radius, density);
     let mass = disc.mass;
     // No contacts exist; the stiffness only enters the DEM's critical-step check, kept far above Δt = 1.
     let model = ContactModel {
@@ -188,8 +188,8 @@ fn start(case: &Case<TerminalVelocity>, exec: &Exec) -> Result<TerminalState> {
     };
     // Body-force density balancing the applied force at the initial coverage.
     let body = CoupledBody {
-        center,
-        velocity: [0.0; 2],
+        center: lbdem_kernels::math::Vector::from(center),
+        velocity: lbdem_kernels::math::Vector::zeros(),
         spin: 0.0,
         shape: BodyShape::Disc { radius },
     };
@@ -219,7 +219,7 @@ fn start(case: &Case<TerminalVelocity>, exec: &Exec) -> Result<TerminalState> {
     let mut dem = DemWorld::new(vec![disc], model, 1.0)?;
     dem.local_damping = 0.0; // local damping is an external momentum sink (it removes momentum from the system: Cundall 1987)
     let mut world = CoupledWorld::new(fluid, dem, LatticeMap::identity(), 1.0, wf, 1)?;
-    world.applied[0] = ([force, 0.0], 0.0);
+    world.applied[0] = (lbdem_kernels::math::vector(force, 0.0), 0.0);
     let p0 = total_momentum(&world);
     Ok(TerminalState {
         world,
