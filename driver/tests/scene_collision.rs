@@ -236,7 +236,10 @@ fn lambda_consistent_with_light_free_grains_at_high_tau_is_refused_and_near_the_
             .setup
             .warnings
     };
-    let warned = |w: &[String]| w.iter().any(|w| w.contains("outside the region measured stable"));
+    let warned = |w: &[String]| {
+        w.iter()
+            .any(|w| w.contains("outside the region measured stable"))
+    };
     // Neutrally buoyant grains (measured: stable at τ = 0.55, diverged from 0.8): refused at 0.8 and 1.2,
     // warned at 0.7, accepted silently at 0.55.
     let light = with(&tv, "grain_density", "1.0");
@@ -252,7 +255,10 @@ fn lambda_consistent_with_light_free_grains_at_high_tau_is_refused_and_near_the_
     // 1.4 × the fluid (measured for 1.25 and 1.5: stable to 1.2, diverged at 2): refused at 2, warned at 1.5,
     // silent at 1.2.
     let mid = with(&tv, "grain_density", "1.4");
-    refused_by_both(&with(&mid, "tau", "2.0"), "terminal_velocity.solid_operator");
+    refused_by_both(
+        &with(&mid, "tau", "2.0"),
+        "terminal_velocity.solid_operator",
+    );
     assert!(warned(&warnings(&with(&mid, "tau", "1.5"))));
     assert!(!warned(&warnings(&with(&mid, "tau", "1.2"))));
     // Rock grains (2.65) at τ = 2: no warning.

@@ -49,8 +49,15 @@ use crate::units::{
     Warnings,
 };
 
-/// The fluid collision of porous-flow scenes without `[fluid] collision`.
-pub const COLLISION: CollisionName = CollisionName::Bgk;
+/// The fluid collision of porous-flow scenes without `[fluid] collision`: TRT, which with ΩΛ (the default
+/// solid operator) gives a permeability that does not depend on τ (README, "Results that do not depend on τ").
+pub const COLLISION: CollisionName = CollisionName::Trt;
+
+/// The solid operator of porous-flow scenes without `solid_operator`: ΩΛ (bounded with pressure boundaries:
+/// fully covered nodes are reset to the solid's equilibrium, so no mass accumulates inside solids).
+pub fn default_operator() -> SolidOperator {
+    SolidOperator::LambdaConsistent
+}
 
 /// One porous-slab run in lattice units.
 #[derive(Clone, Debug, Serialize, Deserialize)]
@@ -492,8 +499,8 @@ pub struct PorousSection {
     /// North/south sides (default "periodic").
     #[serde(default)]
     pub north_south: NorthSouth,
-    /// Solid operator (default "non_equilibrium_bounce_back", Ω₁; see the module docs on open systems).
-    #[serde(default)]
+    /// Solid operator (default "lambda_consistent", ΩΛ with B = ε; see the module docs on open systems).
+    #[serde(default = "default_operator")]
     pub solid_operator: SolidOperator,
 }
 
