@@ -11,7 +11,11 @@
 //!
 //! ```text
 //! cargo run --release -p lbdem --example moving_table [-- --light]
+//! cargo run --release -p lbdem --example moving_table -- --stability 1,1.25,1.5,2
 //! ```
+//!
+//! `--stability` runs only the free disc with ΩΛ, one row per grain/fluid density ratio in the list (the
+//! light-grain limit the scenes refuse or warn about, `lbdem::scene::check_free_grain_operator`).
 #[path = "../tests/common/moving_cases.rs"]
 mod moving_cases;
 
@@ -28,7 +32,39 @@ fn cell(o: Outcome, f: impl Fn(&Outcome) -> String) -> String {
 }
 
 fn main() {
-    let light = std::env::args().any(|a| a == "--light");
+    let args: Vec<String> = std::env::args().collect();
+    if let Some(i) = args.iter().position(|a| a == "--stability") {
+        let list: Vec<f64> = args
+            .get(i + 1)
+            .expect("--stability 1,1.25,...")
+            .split(',')
+            .map(|x| x.parse().expect("a density ratio"))
+            .collect();
+        let m = Method::LAMBDA;
+        print!("| ΩΛ free disc: ρs/ρf |");
+        for tau in TAUS {
+            print!(" τ = {tau} |");
+        }
+        println!();
+        print!("|---|");
+        for _ in TAUS {
+            print!("---|");
+        }
+        println!();
+        for density in list {
+            print!("| {density} |");
+            for tau in TAUS {
+                let s = cell(free_disc(m, tau, density), |o| {
+                    format!("{:+.2} %", 100.0 * o.error)
+                });
+                eprintln!("ΩΛ free disc ρs/ρf = {density} τ={tau}: {s}");
+                print!(" {s} |");
+            }
+            println!();
+        }
+        return;
+    }
+    let light = args.iter().any(|a| a == "--light");
     let density = if light { 1.0 } else { 2.65 };
     print!("| operator | case |");
     for tau in TAUS {

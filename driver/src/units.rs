@@ -15,6 +15,9 @@
 //! or Δt, derives the other, and prints every derived figure at start-up.
 use serde::{Deserialize, Serialize};
 
+use lbdem_kernels::fluid::collide::{Collision, CollisionError, Trt};
+use lbdem_kernels::Real;
+
 use crate::error::{positive, LbdemError, Result};
 
 /// Unit system of a scene. All inputs of one scene are in the same system; formulas are unit-consistent, so
@@ -85,6 +88,24 @@ pub struct FluidSection {
     /// Time step Δt. Give this or `tau`.
     #[serde(default)]
     pub timestep: Option<f64>,
+    /// Fluid collision: `"bgk"` or `"trt"` (Ginzburg's two relaxation times). Absent: the scene kind's
+    /// default ([`FluidSection::collision`]).
+    #[serde(default)]
+    pub collision: Option<CollisionName>,
+    /// TRT's magic parameter Λ = (τ⁺ − ½)(τ⁻ − ½) (default 3/16: half-way walls exactly half-way at every τ).
+    /// Only with `collision = "trt"` (or a kind whose default is TRT).
+    #[serde(default)]
+    pub magic: Option<f64>,
+}
+
+/// The fluid collision a scene asks for (`[fluid] collision`); its parameter is `[fluid] magic`.
+#[derive(Clone, Copy, Debug, Deserialize, Serialize, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum CollisionName {
+    /// Bhatnagar–Gross–Krook, one relaxation time (steady results move with τ).
+    Bgk,
+    /// Two relaxation times at fixed Λ (steady results independent of τ).
+    Trt,
 }
 
 impl FluidSection {
@@ -126,6 +147,77 @@ impl FluidSection {
             )),
             (None, Some(dt)) => positive("fluid.timestep", dt, "give the time step in seconds"),
             _ => Ok(()),
+        }?;
+        if let Some(m) = self.magic {
+            if self.collision == Some(CollisionName::Bgk) {
+                return Err(LbdemError::field(
+                    "fluid.magic",
+                    m,
+                    "is given with fluid.collision = \"bgk\", which has one relaxation time and no magic parameter",
+                    "remove fluid.magic, or set fluid.collision = \"trt\"",
+                ));
+            }
+            if !(m.is_finite() && m > 0.0) {
+                return Err(LbdemError::field(
+                    "fluid.magic",
+                    m,
+                    "TRT's magic parameter Lambda = (tau+ - 1/2)(tau- - 1/2) must be a positive finite number \
+                     (Lambda <= 0 puts tau- at or below 1/2: unstable)",
+                    "use 0.1875 (3/16, the default: half-way walls exactly half-way at every tau)",
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    /// The fluid collision of this scene (`default` the kind's), checked at relaxation time `tau` in both
+    /// precisions (see [`FluidSection::collision`]); [`collision_of`] converts it to the run's precision.
+    pub fn checked_collision(&self, default: CollisionName, tau: f64) -> Result<Collision<f64>> {
+        let collision = self.collision::<f64>(default, tau)?;
+        self.collision::<f32>(default, tau)?;
+        Ok(collision)
+    }
+
+    /// The fluid collision of this scene at relaxation time `tau` (τ⁺): `[fluid] collision` if given, else
+    /// `default` (the kind's), with `[fluid] magic` (default 3/16) for TRT. Refuses, naming the field, a TRT
+    /// whose τ⁻ = ½ + Λ/(τ⁺ − ½) is not finite or not above ½.
+    pub fn collision<T: Real>(&self, default: CollisionName, tau: f64) -> Result<Collision<T>> {
+        self.validate()?;
+        let collision = match self.collision.unwrap_or(default) {
+            CollisionName::Bgk => Collision::Bgk,
+            CollisionName::Trt => {
+                let magic = self.magic.unwrap_or(Trt::<f64>::DEFAULT_MAGIC);
+                Collision::Trt(Trt::new(T::lit(magic)).map_err(|_| {
+                    LbdemError::field(
+                        "fluid.magic",
+                        magic,
+                        "is not a positive finite number in this precision",
+                        "use 0.1875 (3/16)",
+                    )
+                })?)
+            }
+        };
+        match collision.rates(T::lit(tau)) {
+            Ok(_) => Ok(collision),
+            Err(CollisionError::Tau) => Err(LbdemError::field(
+                "fluid.tau",
+                tau,
+                "is not above 1/2 in this precision",
+                "use tau in (0.5, 2]",
+            )),
+            Err(_) => {
+                let magic = self.magic.unwrap_or(Trt::<f64>::DEFAULT_MAGIC);
+                Err(LbdemError::field(
+                    "fluid.magic",
+                    magic,
+                    &format!(
+                        "gives tau- = 1/2 + Lambda/(tau - 1/2) = {:e} at tau = {tau}, which must be finite and \
+                         above 1/2",
+                        0.5 + magic / (tau - 0.5)
+                    ),
+                    "use magic = 0.1875 (3/16), or a tau farther from 1/2",
+                ))
+            }
         }
     }
 
@@ -133,6 +225,24 @@ impl FluidSection {
     pub fn lattice_units(&self) -> Result<LatticeUnits> {
         self.validate()?;
         LatticeUnits::from_fluid(self)
+    }
+}
+
+/// A collision checked by [`FluidSection::checked_collision`] in precision `T` (refused, naming `fluid.magic`,
+/// when Λ is not positive and finite in `T`).
+pub fn collision_of<T: Real>(collision: Collision<f64>) -> Result<Collision<T>> {
+    match collision {
+        Collision::Bgk => Ok(Collision::Bgk),
+        Collision::Trt(t) => Trt::new(T::lit(t.magic()))
+            .map(Collision::Trt)
+            .map_err(|_| {
+                LbdemError::field(
+                    "fluid.magic",
+                    t.magic(),
+                    "is not a positive finite number in this precision",
+                    "use 0.1875 (3/16)",
+                )
+            }),
     }
 }
 
@@ -497,6 +607,8 @@ mod tests {
             spacing: 0.009,
             tau,
             timestep: dt,
+            collision: None,
+            magic: None,
         }
     }
 

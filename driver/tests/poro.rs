@@ -67,7 +67,7 @@ fn omega3_is_refused_for_a_free_grain_because_it_is_unstable() {
     .unwrap()
     .replace(
         "duration = 0.605",
-        "duration = 0.605\nsolid_operator = \"moving_wall\"",
+        "duration = 0.605\nsolid_operator = \"moving_wall_bounce_back\"",
     );
     let err = Case::<TerminalVelocity>::read(&text, "inline")
         .err()

@@ -53,8 +53,10 @@ pub const MAGIC: [u8; 8] = *b"LBDEMCKP";
 /// Version of the layout; bumped whenever the header or the payload encoding changes. Version 1 (hand-written
 /// payloads) was replaced by version 2 (serde + postcard payloads, the checksum over the payload only). Version 3
 /// adds the lattice's side velocity profiles (issue 11) and puts the header under the checksum (in version 2 an
-/// edited step or kind tag went unnoticed); version-2 files are refused with the version named.
-pub const FORMAT_VERSION: u32 = 3;
+/// edited step or kind tag went unnoticed); version-2 files are refused with the version named. Version 4 adds
+/// the fluid collision (TRT's magic parameter) to the cases of the cylinder-array, porous-flow and channel kinds
+/// (issue 11, `[fluid] collision`); version-3 files are refused with the version named.
+pub const FORMAT_VERSION: u32 = 4;
 /// SHA-256 of a scene text (stored in the header, checked on resume).
 pub fn scene_hash(text: &str) -> [u8; 32] {
     Sha256::digest(text.as_bytes()).into()

@@ -229,3 +229,89 @@ pub(crate) fn whole_spacings(field: &str, length: f64, h: f64) -> Result<usize> 
 }
 
 pub use crate::input::parse::{kind_field, parse_scene, peek_kind, read_scene_text, KindField};
+
+/// Where ΩΛ with a free grain was measured stable and where it diverged (κ = 1.27; the free disc of
+/// `scenes/terminal_velocity.toml`, radius 10 nodes, Re ≈ 0.1;
+/// `cargo run --release -p lbdem --example moving_table -- --stability 1.25,1.5,2,2.65` and `-- --light`):
+/// (lowest grain/fluid density ratio of the row, largest τ measured stable, smallest τ measured to diverge).
+/// ρs/ρf = 1: stable at τ = 0.55, diverged from 0.8; 1.25 and 1.5: stable to 1.2, diverged at 2; 2 and 2.65:
+/// stable to 2 (the largest τ measured).
+pub const LAMBDA_FREE_GRAIN_STABILITY: [(f64, f64, f64); 3] = [
+    (0.0, 0.55, 0.8),
+    (1.25, 1.2, 2.0),
+    (2.0, 2.0, f64::INFINITY),
+];
+
+/// Check the PSM solid operator `op` (read from `field`) of a scene whose grains move freely under the fluid's
+/// force, at relaxation time `tau`, for grains `density_ratio` times as dense as the fluid (the lightest grain).
+///
+/// Refused (the moving-solid table of issue 11, README "Moving solids, every operator"): Ω₃ (moving-wall
+/// bounce-back; at full cover it reverses the fluid's velocity relative to the grain and the coupled mode grows
+/// by 1 + 2 m_fluid/m_grain per step: divergence within ~100 steps), Ω₂ (superposition: fluid seeps through
+/// moving solids, effective surface 0.15–1.4 spacings off and a free disc's drag −3 % to −21 %), and ΩΛ with
+/// light grains at a τ where it was measured to diverge ([`LAMBDA_FREE_GRAIN_STABILITY`]; warned between the
+/// last τ measured stable and the first measured to diverge, and for grains lighter than the fluid). Ω₁ and
+/// Ω₁ₗ pass (τ-dependent drag; see README).
+pub fn check_free_grain_operator(
+    field: &str,
+    op: lbdem_kernels::fluid::collide::SolidOperator,
+    tau: f64,
+    density_ratio: f64,
+    warnings: &mut crate::units::Warnings,
+) -> Result<()> {
+    use lbdem_kernels::fluid::collide::SolidOperator as Op;
+    let fix = "use solid_operator = \"lambda_consistent\" (Omega_Lambda, the default: stable with free rock grains, \
+               drag independent of tau with collision = \"trt\"), or \"linearized_non_equilibrium_bounce_back\" \
+               (Omega_1l)";
+    match op {
+        Op::MovingWallBounceBack => Err(LbdemError::field(
+            field,
+            op.name(),
+            "Omega_3 is unstable for free grains: at full cover it reverses the velocity of the fluid inside a \
+             grain relative to the grain, and with the grain's reaction that mode grows by 1 + 2 m_fluid/m_grain \
+             per step (divergence within ~100 steps)",
+            fix,
+        )),
+        Op::Superposition => Err(LbdemError::field(
+            field,
+            op.name(),
+            "Omega_2 lets fluid seep through moving solids: the effective surface of a sliding slab is 0.15-1.4 \
+             spacings off and a free grain's drag is 3-21 % low, growing with tau",
+            fix,
+        )),
+        Op::LambdaConsistent => {
+            let (_, stable, diverged) = LAMBDA_FREE_GRAIN_STABILITY
+                .iter()
+                .rev()
+                .find(|r| density_ratio >= r.0)
+                .copied()
+                .unwrap_or(LAMBDA_FREE_GRAIN_STABILITY[0]);
+            let measured = "measured with a free disc (README, moving solids): grain/fluid density 1 stable at \
+                            tau = 0.55 and diverged from 0.8; 1.25-1.5 stable to 1.2 and diverged at 2; 2 and \
+                            above stable to 2";
+            if tau >= diverged {
+                return Err(LbdemError::field(
+                    field,
+                    op.name(),
+                    &format!(
+                        "Omega_Lambda with free grains {density_ratio:.3} times as dense as the fluid diverges at \
+                         tau = {tau:.4} ({measured})"
+                    ),
+                    &format!(
+                        "lower fluid.tau to {stable} or below (a smaller time step), or use solid_operator = \
+                         \"linearized_non_equilibrium_bounce_back\" (Omega_1l)"
+                    ),
+                ));
+            }
+            if tau > stable || density_ratio < 1.0 {
+                warnings.push(format!(
+                    "{field} = \"lambda_consistent\" with free grains {density_ratio:.3} times as dense as the \
+                     fluid at tau = {tau:.4}: outside the region measured stable, expect divergence ({measured}); \
+                     lower tau to {stable} if the run diverges"
+                ));
+            }
+            Ok(())
+        }
+        _ => Ok(()),
+    }
+}

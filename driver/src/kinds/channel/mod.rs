@@ -10,6 +10,7 @@ use std::path::Path;
 use std::time::Instant;
 
 use lbdem_kernels::fluid::boundary::{Boundaries, SideCondition};
+use lbdem_kernels::fluid::collide::Collision;
 use lbdem_kernels::fluid::step::FluidParams;
 use lbdem_kernels::Real;
 use serde::de::DeserializeOwned;
@@ -26,8 +27,12 @@ use crate::output::{csv, write_atomic};
 use crate::run::{run_in_memory, Case, CheckpointInterval, Kind, OutputStage, Persist, RunOptions};
 use crate::scene::{Precision, RunSection, SceneHeader, UnitLabels};
 use crate::units::{
-    check_density_drop, check_mach, check_tau, FluidSection, LatticeUnits, Warnings,
+    check_density_drop, check_mach, check_tau, collision_of, CollisionName, FluidSection,
+    LatticeUnits, Warnings,
 };
+
+/// The fluid collision of channel scenes without `[fluid] collision` (no solids: BGK, the dissertation's).
+pub const COLLISION: CollisionName = CollisionName::Bgk;
 
 /// How a channel flow is driven.
 #[derive(Clone, Copy, Debug, Deserialize, Serialize, PartialEq, Eq)]
@@ -108,6 +113,8 @@ pub struct ChannelSetup {
     pub steps: u64,
     /// Warnings about the settings.
     pub warnings: Warnings,
+    /// Fluid collision (`[fluid] collision`, default [`COLLISION`]).
+    pub collision: Collision<f64>,
 }
 
 fn nodes_for(field: &str, length: f64, h: f64) -> Result<usize> {
@@ -213,6 +220,7 @@ impl ChannelSetup {
             diffusion_steps: (ny as f64).powi(2) / units.lattice_viscosity,
             steps,
             warnings,
+            collision: scene.fluid.checked_collision(COLLISION, units.tau)?,
         })
     }
 
@@ -331,6 +339,7 @@ pub fn build_lattice<T: Real>(setup: &ChannelSetup) -> Result<FluidLattice<T>> {
         force,
     };
     let mut lattice = FluidLattice::new(setup.nx, setup.ny, bc, params)?;
+    lattice.set_collision(collision_of(setup.collision)?)?;
     if let Some([rin, rout]) = setup.densities {
         // Start from the linear pressure profile at rest: shortens the acoustic transient.
         let nx = setup.nx;

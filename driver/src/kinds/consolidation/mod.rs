@@ -148,6 +148,11 @@ fn start(case: &Case<Consolidation>, exec: &Exec) -> Result<ConsolidationState> 
         },
     )?;
     exec.apply(&mut fluid);
+    fluid.set_collision(crate::units::collision_of(
+        case.scene
+            .fluid
+            .checked_collision(crate::units::CollisionName::Bgk, u.tau)?,
+    )?)?;
     fluid.set_solid_operator(SolidOperator::LinearizedNonEquilibriumBounceBack);
     let map = LatticeMap::of(u, [lo[0] - 0.5 * h, lo[1] - 0.5 * h]);
     let mut world = CoupledWorld::new(
@@ -251,6 +256,9 @@ impl Kind for Consolidation {
     fn validate(scene: &ConsolidationScene) -> Result<()> {
         scene.scene.require_f64()?;
         let u = scene.fluid.lattice_units()?;
+        scene
+            .fluid
+            .checked_collision(crate::units::CollisionName::Bgk, u.tau)?;
 
         let c = &scene.consolidation;
         positive("consolidation.radius", c.radius, "grain radius")?;

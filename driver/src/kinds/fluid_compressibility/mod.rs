@@ -161,6 +161,11 @@ impl CompressibilityState {
             },
         )?;
         exec.apply(&mut fluid);
+        fluid.set_collision(crate::units::collision_of(
+            case.scene
+                .fluid
+                .checked_collision(crate::units::CollisionName::Bgk, u.tau)?,
+        )?)?;
         fluid.set_solid_operator(SolidOperator::MovingWallBounceBack);
         // The piston: an ellipse 2b = 3 nodes thick with its major axis along y, 50 × the box height long, so
         // its faces are flat to (H/2)²/(2a) · b/a ≈ 1e-5 nodes across the box. Fluid fills the chamber behind
@@ -321,6 +326,9 @@ impl Kind for FluidCompressibility {
     fn validate(scene: &CompressibilityScene) -> Result<()> {
         scene.scene.require_f64()?;
         let u = scene.fluid.lattice_units()?;
+        scene
+            .fluid
+            .checked_collision(crate::units::CollisionName::Bgk, u.tau)?;
 
         let c = &scene.fluid_compressibility;
         positive("fluid_compressibility.length", c.length, "box length")?;

@@ -57,8 +57,11 @@ use crate::scene::solid::{
     bond_spec, critical_time_step, packing_spec, validate_packing_and_solid, PackingSection,
     SolidSection,
 };
-use crate::scene::{CheckpointSection, SceneHeader, UnitLabels};
-use crate::units::{check_density_drop, check_tau, FluidSection, LatticeUnits, Warnings};
+use crate::scene::{check_free_grain_operator, CheckpointSection, SceneHeader, UnitLabels};
+use crate::units::{
+    check_density_drop, check_tau, collision_of, CollisionName, FluidSection, LatticeUnits,
+    Warnings,
+};
 
 use analysis::{cluster_fractures, BreakRow, Fracture};
 
@@ -78,17 +81,25 @@ pub struct FractureFluid {
     /// Fluid (and coupled DEM) time step Δt (give this or `tau`).
     #[serde(default)]
     pub timestep: Option<f64>,
+    /// Fluid collision, "bgk" or "trt" (default [`COLLISION`]).
+    #[serde(default)]
+    pub collision: Option<CollisionName>,
+    /// TRT's magic parameter Λ (default 3/16).
+    #[serde(default)]
+    pub magic: Option<f64>,
     /// Fraction of each grain's size the fluid sees (table 6.2: 0.6; table 6.3: 0.6–0.95).
     pub fluid_radius: f64,
     /// Free fluid beyond each end of the sample along x (default 0.3 cm).
     #[serde(default = "default_margin")]
     pub margin: f64,
-    /// PSM weighting B: "noble_torczynski" (default), B(ε, τ) = ε(τ − ½)/((1 − ε) + (τ − ½)) (eq. 4.5; near
+    /// PSM weighting B (default: the solid operator's, [`SolidOperator::weighting`]: B = ε for ΩΛ,
+    /// "noble_torczynski" for the others): "noble_torczynski", B(ε, τ) = ε(τ − ½)/((1 − ε) + (τ − ½)) (eq. 4.5; near
     /// τ = ½ it makes partly covered cells almost fluid, so the fluid radius the flow feels is smaller than the
     /// one given), or "solid_fraction", B = ε.
     #[serde(default)]
-    pub weighting: Weighting,
-    /// PSM solid operator (default "linearized", Ω₁ₗ: bounded with pressure boundaries, stable with free grains).
+    pub weighting: Option<Weighting>,
+    /// PSM solid operator (default "linearized_non_equilibrium_bounce_back", Ω₁ₗ: bounded with pressure
+    /// boundaries, stable with free grains). Ω₂ and Ω₃ are refused (free grains).
     #[serde(default = "default_operator")]
     pub solid_operator: SolidOperator,
 }
@@ -96,6 +107,29 @@ pub struct FractureFluid {
 fn default_margin() -> f64 {
     0.3
 }
+/// The fluid collision of fracture scenes without `[fluid] collision`.
+pub const COLLISION: CollisionName = CollisionName::Bgk;
+
+impl FractureFluid {
+    /// The PSM weighting: `weighting` if given, else the solid operator's.
+    pub fn weighting(&self) -> Weighting {
+        self.weighting.unwrap_or(self.solid_operator.weighting())
+    }
+
+    /// `[fluid]` as the shared section (units and collision).
+    fn section(&self) -> FluidSection {
+        FluidSection {
+            density: self.density,
+            viscosity: self.viscosity,
+            spacing: self.spacing,
+            tau: self.tau,
+            timestep: self.timestep,
+            collision: self.collision,
+            magic: self.magic,
+        }
+    }
+}
+
 fn default_operator() -> SolidOperator {
     SolidOperator::LinearizedNonEquilibriumBounceBack
 }
@@ -352,14 +386,16 @@ impl FractureScene {
         positive("fluid.density", f.density, "e.g. 1 g/cm^3")?;
         positive("fluid.viscosity", f.viscosity, "table 6.2: 0.2 cm^2/s")?;
         positive("fluid.spacing", f.spacing, "table 6.2: 0.009 cm")?;
-        let units = LatticeUnits::from_fluid(&FluidSection {
-            density: f.density,
-            viscosity: f.viscosity,
-            spacing: f.spacing,
-            tau: f.tau,
-            timestep: f.timestep,
-        })?;
+        let units = LatticeUnits::from_fluid(&f.section())?;
         check_tau(&units, warnings);
+        f.section().checked_collision(COLLISION, units.tau)?;
+        check_free_grain_operator(
+            "fluid.solid_operator",
+            f.solid_operator,
+            units.tau,
+            self.packing.density / f.density,
+            warnings,
+        )?;
         let h = f.spacing;
         let lx = self.packing.width + 2.0 * f.margin;
         let nodes = [
@@ -491,7 +527,7 @@ impl FractureScene {
                     lo = fs.density_low,
                     ma = fs.expected_mach,
                     op = f.solid_operator,
-                    wt = f.weighting,
+                    wt = f.weighting(),
                     len = labels.length,
                     t = labels.time,
                     v = labels.velocity,
@@ -753,6 +789,9 @@ pub fn prepare_packed(scene: &FractureScene, packing: Packing<f64>) -> Result<Fr
                 },
             )?;
             lattice.fill_equilibrium(|_, _| (setup.density_high, [0.0; 2]));
+            lattice.set_collision(collision_of(
+                f.section().checked_collision(COLLISION, u.tau)?,
+            )?)?;
             lattice.set_solid_operator(f.solid_operator);
             let map = LatticeMap {
                 spacing: u.spacing,
@@ -772,7 +811,7 @@ pub fn prepare_packed(scene: &FractureScene, packing: Packing<f64>) -> Result<Fr
                 .collect();
             let applied_before = world.external_force.clone();
             let mut coupled =
-                CoupledWorld::new(lattice, world, map, f.fluid_radius, f.weighting, 1)?;
+                CoupledWorld::new(lattice, world, map, f.fluid_radius, f.weighting(), 1)?;
             if !scene.heterogeneity.is_empty() {
                 coupled.grain_fluid_radius = grain_radius;
             }
@@ -850,6 +889,7 @@ impl<'a, S: std::ops::Deref<Target = FractureState>> FractureRun<'a, S> {
             force: [0.0; 2],
         };
         let mut lattice = FluidLattice::new(nx, ny, bc, params)?;
+        lattice.set_collision(fp.world.fluid.collision())?;
         lattice.set_solid_operator(fp.world.fluid.solid_operator());
         Ok(lattice)
     }

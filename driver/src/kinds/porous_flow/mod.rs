@@ -21,7 +21,7 @@ use std::path::Path;
 use std::time::Instant;
 
 use lbdem_kernels::fluid::boundary::{Boundaries, SideCondition};
-use lbdem_kernels::fluid::collide::{SolidOperator, Weighting};
+use lbdem_kernels::fluid::collide::{Collision, SolidOperator};
 use lbdem_kernels::fluid::step::FluidParams;
 use lbdem_kernels::Real;
 use lbdem_reference::analytic::{kozeny_constant, sangani_acrivos_tabulated};
@@ -44,7 +44,20 @@ use crate::output::{csv, write_atomic};
 use crate::run::cases::{CaseRun, Cases};
 use crate::run::{Case, CheckpointInterval, Kind, OutputStage, Persist};
 use crate::scene::{whole_spacings, Precision, RunSection, SceneHeader, UnitLabels};
-use crate::units::{check_density_drop, check_tau, FluidSection, LatticeUnits, Warnings};
+use crate::units::{
+    check_density_drop, check_tau, collision_of, CollisionName, FluidSection, LatticeUnits,
+    Warnings,
+};
+
+/// The fluid collision of porous-flow scenes without `[fluid] collision`: TRT, which with ΩΛ (the default
+/// solid operator) gives a permeability that does not depend on τ (README, "Results that do not depend on τ").
+pub const COLLISION: CollisionName = CollisionName::Trt;
+
+/// The solid operator of porous-flow scenes without `solid_operator`: ΩΛ (bounded with pressure boundaries:
+/// fully covered nodes are reset to the solid's equilibrium, so no mass accumulates inside solids).
+pub fn default_operator() -> SolidOperator {
+    SolidOperator::LambdaConsistent
+}
 
 /// One porous-slab run in lattice units.
 #[derive(Clone, Debug, Serialize, Deserialize)]
@@ -69,6 +82,9 @@ pub struct PorousCase {
     pub tau: f64,
     /// Solid operator of the PSM.
     pub solid_operator: SolidOperator,
+    /// Fluid collision (BGK, or TRT with its magic parameter).
+    #[serde(default)]
+    pub collision: Collision<f64>,
     /// Inlet minus outlet lattice density (ρ_in, ρ_out = 1 ± Δρ/2).
     pub density_drop: f64,
     /// Stop once the relative change of the flux over one check interval is below this.
@@ -264,10 +280,11 @@ impl<T: Real> PorousRun<T> {
         };
         let mut lattice = FluidLattice::new(nx, ny, bc, params)?;
         exec.apply(&mut lattice);
+        lattice.set_collision(collision_of(case.collision)?)?;
         lattice.set_solid_operator(case.solid_operator);
         lattice.set_band_rows(ny.div_ceil(2).max(1));
         let discs = case.discs();
-        lattice.cover_with_discs(&discs, Weighting::NobleTorczynski);
+        lattice.cover_with_discs(&discs, case.solid_operator.weighting());
         let eps = lattice.solid_fraction_map();
         // Start from the linear pressure profile at rest (shortens the pressure-diffusion transient).
         lattice.fill_equilibrium(|x, _| {
@@ -482,8 +499,8 @@ pub struct PorousSection {
     /// North/south sides (default "periodic").
     #[serde(default)]
     pub north_south: NorthSouth,
-    /// Solid operator (default "bounce_back", Ω₁; see the module docs on open systems).
-    #[serde(default)]
+    /// Solid operator (default "lambda_consistent", ΩΛ with B = ε; see the module docs on open systems).
+    #[serde(default = "default_operator")]
     pub solid_operator: SolidOperator,
 }
 
@@ -602,6 +619,7 @@ impl PorousSetup {
                     walls: p.north_south == NorthSouth::Walls,
                     tau: units.tau,
                     solid_operator: p.solid_operator,
+                    collision: scene.fluid.checked_collision(COLLISION, units.tau)?,
                     density_drop: drho,
                     steady_tolerance: scene.run.steady_tolerance.unwrap_or(1e-8),
                     check_interval: scene.run.check_interval.unwrap_or(200),
@@ -918,6 +936,7 @@ mod tests {
             walls: false,
             tau: 0.8,
             solid_operator: SolidOperator::NonEquilibriumBounceBack,
+            collision: Collision::Bgk,
             density_drop: 1e-3,
             steady_tolerance: 1e-8,
             check_interval: 100,

@@ -208,6 +208,11 @@ fn start(case: &Case<PressureDiffusion>, exec: &Exec) -> Result<DiffusionState> 
             },
         )?;
         exec.apply(&mut f);
+        f.set_collision(crate::units::collision_of(
+            case.scene
+                .fluid
+                .checked_collision(crate::units::CollisionName::Bgk, tau)?,
+        )?)?;
         f.set_solid_operator(SolidOperator::MovingWallBounceBack);
         f.cover_with_bodies(&bodies, wf);
         Ok(f)
@@ -441,6 +446,9 @@ impl Kind for PressureDiffusion {
     fn validate(scene: &PressureDiffusionScene) -> Result<()> {
         scene.scene.require_f64()?;
         let u = scene.fluid.lattice_units()?;
+        scene
+            .fluid
+            .checked_collision(crate::units::CollisionName::Bgk, u.tau)?;
 
         let d = &scene.pressure_diffusion;
         positive("pressure_diffusion.width", d.width, "slab width")?;

@@ -21,7 +21,7 @@ use lbdem_kernels::coupling::{BodyShape, CoupledBody};
 use lbdem_kernels::dem::assembly::ContactModel;
 use lbdem_kernels::dem::shape::Particle;
 use lbdem_kernels::fluid::boundary::Boundaries;
-use lbdem_kernels::fluid::collide::{weighting, SolidOperator, Weighting};
+use lbdem_kernels::fluid::collide::{lambda_weighting, weighting, Collision, SolidOperator};
 use lbdem_kernels::fluid::step::FluidParams;
 use lbdem_reference::analytic::sangani_acrivos_drag;
 use serde::{Deserialize, Serialize};
@@ -35,8 +35,13 @@ use crate::input::limits::{self, Budget};
 use crate::observe::health::{dem_health, fluid_health};
 use crate::output::{csv, write_atomic};
 use crate::run::{run_in_memory, Case, CheckpointInterval, Kind, OutputStage, Persist, RunOptions};
-use crate::scene::{CheckpointSection, SceneHeader, UnitLabels, UnitsSetup};
-use crate::units::FluidSection;
+use crate::scene::{
+    check_free_grain_operator, CheckpointSection, SceneHeader, UnitLabels, UnitsSetup,
+};
+use crate::units::{collision_of, CollisionName, FluidSection, Warnings};
+
+/// The fluid collision of terminal-velocity scenes without `[fluid] collision`.
+pub const COLLISION: CollisionName = CollisionName::Bgk;
 
 /// `[terminal_velocity]`
 #[derive(Clone, Debug, Deserialize, Serialize)]
@@ -55,8 +60,10 @@ pub struct TerminalVelocitySection {
     /// Fraction of the run (at its end) over which the slip is averaged (default 0.2).
     #[serde(default)]
     pub average_fraction: Option<f64>,
-    /// Solid operator: "bounce_back" (Ω₁, default) or "superposition" (Ω₂). Ω₃ ("moving_wall") is refused for
-    /// a free grain: see [`omega3_free_grain_growth`].
+    /// Solid operator: "non_equilibrium_bounce_back" (Ω₁, default), "linearized_non_equilibrium_bounce_back"
+    /// (Ω₁ₗ) or "lambda_consistent" (ΩΛ, B = ε). Ω₃ ("moving_wall_bounce_back", see
+    /// [`omega3_free_grain_growth`]) and Ω₂ ("superposition", leaks through moving solids) are refused for a free
+    /// grain, and ΩΛ for light grains at high τ ([`check_free_grain_operator`]).
     #[serde(default)]
     pub solid_operator: SolidOperator,
 }
@@ -135,11 +142,17 @@ pub struct TerminalState {
 
 impl Persist for TerminalState {}
 
-/// Σ_n (1 − B_n): the weight of the fluid's body force over the nodes (Guo forcing scaled by 1 − B).
-fn fluid_weight(eps: &[f64], tau: f64) -> f64 {
-    eps.iter()
-        .map(|&e| 1.0 - weighting(Weighting::NobleTorczynski, e, tau))
-        .sum()
+/// Σ_n (1 − B_n): the weight of the fluid's body force over the nodes (Guo forcing scaled by 1 − B), B the
+/// weighting of `op` ([`SolidOperator::weighting`]; ΩΛ's in its τ-free form).
+fn fluid_weight(eps: &[f64], tau: f64, op: SolidOperator, collision: Collision<f64>) -> f64 {
+    let w = op.weighting();
+    match (op, collision.rates(tau)) {
+        (SolidOperator::LambdaConsistent, Ok(rates)) => eps
+            .iter()
+            .map(|&e| 1.0 - lambda_weighting(w, e, rates))
+            .sum(),
+        _ => eps.iter().map(|&e| 1.0 - weighting(w, e, tau)).sum(),
+    }
 }
 
 /// Fluid + grain momentum along x.
@@ -156,7 +169,9 @@ fn start(case: &Case<TerminalVelocity>, exec: &Exec) -> Result<TerminalState> {
     let tau = u.tau;
     let force = u.force_to_lattice(t.applied_force);
     let steps = u.time_to_steps(t.duration).round().max(1.0) as u64;
-    let wf = Weighting::NobleTorczynski;
+    let op = t.solid_operator;
+    let wf = op.weighting();
+    let collision = collision_of(case.scene.fluid.checked_collision(COLLISION, tau)?)?;
     // The disc in lattice coordinates (the DEM runs in lattice units through LatticeMap::identity, the physical
     // inputs having been converted above by LatticeUnits).
     let center = [0.5 * l - 0.25, 0.5 * l + 0.15];
@@ -188,7 +203,7 @@ fn start(case: &Case<TerminalVelocity>, exec: &Exec) -> Result<TerminalState> {
         },
     )?;
     probe.cover_with_bodies(&[body], wf);
-    let g = -force / fluid_weight(&probe.solid_fraction_map(), tau);
+    let g = -force / fluid_weight(&probe.solid_fraction_map(), tau, op, collision);
     let mut fluid = FluidLattice::<f64>::new(
         n,
         n,
@@ -199,7 +214,8 @@ fn start(case: &Case<TerminalVelocity>, exec: &Exec) -> Result<TerminalState> {
         },
     )?;
     exec.apply(&mut fluid);
-    fluid.set_solid_operator(t.solid_operator);
+    fluid.set_collision(collision)?;
+    fluid.set_solid_operator(op);
     let mut dem = DemWorld::new(vec![disc], model, 1.0)?;
     dem.local_damping = 0.0; // local damping is an external momentum sink (it removes momentum from the system: Cundall 1987)
     let mut world = CoupledWorld::new(fluid, dem, LatticeMap::identity(), 1.0, wf, 1)?;
@@ -227,6 +243,8 @@ impl TerminalState {
     /// Up to 500 steps, accumulating the impulse, the momentum error, the records and the averaging window.
     fn advance(&mut self, case: &Case<TerminalVelocity>) {
         let tau = case.setup.units.tau;
+        let op = self.world.fluid.solid_operator();
+        let collision = self.world.fluid.collision();
         let l = self.cell as f64;
         let (force, g) = (self.force, self.g);
         let end = ((self.done / 500 + 1) * 500).min(self.steps);
@@ -238,7 +256,7 @@ impl TerminalState {
             let (records, window) = (&mut self.records, &mut self.window);
             world.step();
             let eps = world.fluid.solid_fraction_map();
-            *impulse += force + g * fluid_weight(&eps, tau);
+            *impulse += force + g * fluid_weight(&eps, tau, op, collision);
             let p = total_momentum(world);
             *momentum_error = momentum_error.max((p - p0 - *impulse).abs());
             let in_window = s > window_start;
@@ -366,18 +384,14 @@ impl Kind for TerminalVelocity {
                 "refine fluid.spacing or enlarge the box",
             ));
         }
-        if t.solid_operator == SolidOperator::MovingWallBounceBack {
-            return Err(LbdemError::field(
-                "terminal_velocity.solid_operator",
-                "moving_wall",
-                "Omega_3 is unstable for a free grain in the explicit coupled step: the fluid trapped at fully \
-                 covered nodes is bounced back every step and hands the grain 2 rho (u - V) per node, so the \
-                 grain/interior-fluid mode grows by a factor -(1 + 2 M_int/m) per step (M_int the fluid mass \
-                 inside the grain, m its mass) for any density ratio",
-                "use solid_operator = \"bounce_back\" (Omega_1, stable for grains denser than about the fluid) \
-                 or \"superposition\" (Omega_2)",
-            ));
-        }
+        scene.fluid.checked_collision(COLLISION, u.tau)?;
+        check_free_grain_operator(
+            "terminal_velocity.solid_operator",
+            t.solid_operator,
+            u.tau,
+            t.grain_density / scene.fluid.density,
+            &mut Warnings::default(),
+        )?;
         if let Some(f) = t.average_fraction {
             if !(f > 0.0 && f <= 0.5) {
                 return Err(LbdemError::field(
@@ -433,7 +447,18 @@ impl Kind for TerminalVelocity {
     }
 
     fn setup(scene: &TerminalVelocityScene) -> Result<UnitsSetup> {
-        UnitsSetup::new(&scene.fluid)
+        let mut s = UnitsSetup::new(&scene.fluid)?;
+        let t = &scene.terminal_velocity;
+        let mut w = Warnings(std::mem::take(&mut s.warnings));
+        check_free_grain_operator(
+            "terminal_velocity.solid_operator",
+            t.solid_operator,
+            s.units.tau,
+            t.grain_density / scene.fluid.density,
+            &mut w,
+        )?;
+        s.warnings = w.0;
+        Ok(s)
     }
 
     fn describe(case: &Case<Self>) -> String {

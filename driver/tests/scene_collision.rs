@@ -1,0 +1,266 @@
+//! Issue 11, phase 2: the scene keys of the fluid collision (`[fluid] collision`, `magic`) and of the PSM solid
+//! operator (`solid_operator`, named by the literature), and their refusals: the words of earlier scene files
+//! are refused naming the new word, Λ ≤ 0 / non-finite Λ / τ⁻ ≤ ½ / `magic` with BGK name `fluid.magic`, and an
+//! operator that is not valid for free grains is refused naming the key and the operator to use. Each refusal is
+//! reached by `check` and by `run` with the same message, before anything is written (the pattern of
+//! `hostile.rs`).
+use std::path::Path;
+
+use lbdem::app;
+use lbdem::kinds::channel::Channel;
+use lbdem::kinds::cylinder_array::CylinderArray;
+use lbdem::run::{Case, RunOptions};
+use lbdem_kernels::fluid::collide::{Collision, SolidOperator};
+
+const SCENES: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../scenes");
+
+fn scene(name: &str) -> String {
+    std::fs::read_to_string(Path::new(SCENES).join(name)).unwrap()
+}
+
+/// `text` with the value of the first line whose key is `key` replaced by `value` (the key must exist).
+fn with(text: &str, key: &str, value: &str) -> String {
+    let mut done = false;
+    let out: Vec<String> = text
+        .lines()
+        .map(|l| {
+            let k = l.split('=').next().unwrap_or_default().trim();
+            if !done && l.contains('=') && k == key {
+                done = true;
+                format!("{key} = {value}")
+            } else {
+                l.to_string()
+            }
+        })
+        .collect();
+    assert!(done, "no key {key}");
+    out.join("\n") + "\n"
+}
+
+/// `text` with `line` added right after the line `after` (which must exist).
+fn adding(text: &str, after: &str, line: &str) -> String {
+    assert!(text.lines().any(|l| l == after), "no line {after}");
+    text.lines()
+        .flat_map(|l| {
+            if l == after {
+                vec![l.to_string(), line.to_string()]
+            } else {
+                vec![l.to_string()]
+            }
+        })
+        .collect::<Vec<_>>()
+        .join("\n")
+        + "\n"
+}
+
+/// `check` refuses `text` naming `field`; `run` refuses it with the same message and writes nothing.
+fn refused_by_both(text: &str, field: &str) -> String {
+    let e = app::check_text(text, "t.toml").unwrap_err().to_string();
+    assert!(
+        e.contains(&format!("`{field}")),
+        "expected `{field}` in: {e}"
+    );
+    let out = std::env::temp_dir().join(format!(
+        "lbdem-scene-collision-never-{}",
+        std::process::id()
+    ));
+    let quiet = RunOptions {
+        quiet: true,
+        ..RunOptions::default()
+    };
+    let r = app::run_text(text, "t.toml", &out, &quiet)
+        .unwrap_err()
+        .to_string();
+    assert_eq!(e, r, "check and run disagree");
+    assert!(!out.exists(), "run wrote {} before refusing", out.display());
+    e
+}
+
+#[test]
+fn every_operator_is_read_by_its_literature_name_and_written_back_the_same() {
+    let base = scene("cylinder_array.toml");
+    for op in SolidOperator::ALL {
+        let text = with(&base, "solid_operator", &format!("\"{}\"", op.name()));
+        let case = Case::<CylinderArray>::read(&text, "t.toml").unwrap();
+        let section = case.scene.cylinder_array.as_ref().unwrap();
+        assert_eq!(section.solid_operator, op);
+        assert!(case.setup.cases.iter().all(|c| c.solid_operator == op));
+        // The scene copy a run writes names it the same way.
+        let copy = toml::to_string(&case.scene).unwrap();
+        assert!(
+            copy.contains(&format!("solid_operator = \"{}\"", op.name())),
+            "{copy}"
+        );
+    }
+}
+
+#[test]
+fn old_operator_words_are_refused_naming_the_new_word() {
+    let array = scene("cylinder_array.toml");
+    for (old, new) in [
+        ("bounce_back", "non_equilibrium_bounce_back"),
+        ("moving_wall", "moving_wall_bounce_back"),
+        ("linearized", "linearized_non_equilibrium_bounce_back"),
+    ] {
+        let e = refused_by_both(
+            &with(&array, "solid_operator", &format!("\"{old}\"")),
+            "cylinder_array.solid_operator",
+        );
+        assert!(e.contains(&format!("\"{new}\"")), "{old}: {e}");
+    }
+    // `bounce_back` meant Ω₁ in scenes; the message says so, so that nobody reads it as Ω₃.
+    let e = app::check_text(&with(&array, "solid_operator", "\"bounce_back\""), "t.toml")
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("Omega_1"), "{e}");
+    // An unknown word lists every name.
+    let e = refused_by_both(
+        &with(&array, "solid_operator", "\"mrt\""),
+        "cylinder_array.solid_operator",
+    );
+    for op in SolidOperator::ALL {
+        assert!(e.contains(op.name()), "{e}");
+    }
+    // Other sections that take the key: [porous] and a fracture scene's [fluid].
+    let porous = scene("porous_darcy.toml");
+    let e = refused_by_both(
+        &with(&porous, "solid_operator", "\"bounce_back\""),
+        "porous.solid_operator",
+    );
+    assert!(e.contains("non_equilibrium_bounce_back"), "{e}");
+    let fracture = adding(
+        &scene("fracture/quick/base.toml"),
+        "margin = 0.2             # cm of free fluid beyond each end",
+        "solid_operator = \"linearized\"",
+    );
+    let e = refused_by_both(&fracture, "fluid.solid_operator");
+    assert!(e.contains("linearized_non_equilibrium_bounce_back"), "{e}");
+}
+
+#[test]
+fn collision_and_magic_are_read_and_bad_values_refused_naming_the_field() {
+    let base = scene("poiseuille.toml");
+    let line = base
+        .lines()
+        .find(|l| l.starts_with("tau"))
+        .expect("tau line")
+        .to_string();
+    // Default of a channel: BGK; "trt" gives Λ = 3/16 unless `magic` says otherwise.
+    let read = |text: &str| {
+        Case::<Channel>::read(text, "t.toml").map(|c| match c.setup.collision {
+            Collision::Bgk => None,
+            Collision::Trt(t) => Some(t.magic()),
+        })
+    };
+    assert_eq!(read(&base).unwrap(), None);
+    let trt = adding(&base, &line, "collision = \"trt\"");
+    assert_eq!(read(&trt).unwrap(), Some(0.1875));
+    let trt_quarter = adding(&trt, "collision = \"trt\"", "magic = 0.25");
+    assert_eq!(read(&trt_quarter).unwrap(), Some(0.25));
+    assert_eq!(
+        read(&adding(&base, &line, "collision = \"bgk\"")).unwrap(),
+        None
+    );
+    // Refusals.
+    refused_by_both(
+        &adding(&base, &line, "collision = \"mrt\""),
+        "fluid.collision",
+    );
+    for bad in ["0.0", "-0.1875", "nan", "inf"] {
+        let e = refused_by_both(&with(&trt_quarter, "magic", bad), "fluid.magic");
+        assert!(e.contains("positive finite"), "{bad}: {e}");
+    }
+    // τ⁻ = ½ + Λ/(τ − ½) rounds to ½ in f64 for Λ = 1e-300: refused, naming the field and τ⁻.
+    let e = refused_by_both(&with(&trt_quarter, "magic", "1e-300"), "fluid.magic");
+    assert!(e.contains("tau-"), "{e}");
+    // In f32, Λ = 1e-50 is 0: refused even for an f64 scene (checked in both precisions).
+    refused_by_both(&with(&trt_quarter, "magic", "1e-50"), "fluid.magic");
+    // `magic` with BGK is refused rather than ignored.
+    let e = refused_by_both(
+        &adding(
+            &adding(&base, &line, "collision = \"bgk\""),
+            "collision = \"bgk\"",
+            "magic = 0.25",
+        ),
+        "fluid.magic",
+    );
+    assert!(
+        e.contains("collision = \\\"trt\\\"") || e.contains("\"trt\""),
+        "{e}"
+    );
+}
+
+#[test]
+fn operators_invalid_for_free_grains_are_refused_naming_the_key_and_the_operator_to_use() {
+    let tv = scene("terminal_velocity.toml");
+    let with_op = |op: &str| {
+        adding(
+            &tv,
+            "duration = 0.605       # s = 5000 steps (12 e-folding times of the slowest viscous mode l^2/(4 pi^2 nu))",
+            &format!("solid_operator = \"{op}\""),
+        )
+    };
+    for op in ["moving_wall_bounce_back", "superposition"] {
+        let e = refused_by_both(&with_op(op), "terminal_velocity.solid_operator");
+        assert!(e.contains("lambda_consistent"), "{op}: {e}");
+    }
+    for op in [
+        "non_equilibrium_bounce_back",
+        "linearized_non_equilibrium_bounce_back",
+        "lambda_consistent",
+    ] {
+        app::check_text(&with_op(op), "t.toml").unwrap_or_else(|e| panic!("{op}: {e}"));
+    }
+    // The fracture scenes (free grains): the same two refused, in [fluid].
+    for op in ["moving_wall_bounce_back", "superposition"] {
+        let fracture = adding(
+            &scene("fracture/quick/base.toml"),
+            "margin = 0.2             # cm of free fluid beyond each end",
+            &format!("solid_operator = \"{op}\""),
+        );
+        let e = refused_by_both(&fracture, "fluid.solid_operator");
+        assert!(e.contains("lambda_consistent"), "{op}: {e}");
+    }
+}
+
+#[test]
+fn lambda_consistent_with_light_free_grains_at_high_tau_is_refused_and_near_the_edge_warned() {
+    let tv = adding(
+        &scene("terminal_velocity.toml"),
+        "duration = 0.605       # s = 5000 steps (12 e-folding times of the slowest viscous mode l^2/(4 pi^2 nu))",
+        "solid_operator = \"lambda_consistent\"",
+    );
+    let warnings = |text: &str| {
+        lbdem::run::Case::<lbdem::kinds::terminal_velocity::TerminalVelocity>::read(text, "t.toml")
+            .unwrap()
+            .setup
+            .warnings
+    };
+    let warned = |w: &[String]| {
+        w.iter()
+            .any(|w| w.contains("outside the region measured stable"))
+    };
+    // Neutrally buoyant grains (measured: stable at τ = 0.55, diverged from 0.8): refused at 0.8 and 1.2,
+    // warned at 0.7, accepted silently at 0.55.
+    let light = with(&tv, "grain_density", "1.0");
+    for tau in ["0.8", "1.2"] {
+        let e = refused_by_both(
+            &with(&light, "tau", tau),
+            "terminal_velocity.solid_operator",
+        );
+        assert!(e.contains("fluid.tau"), "{e}");
+    }
+    assert!(warned(&warnings(&with(&light, "tau", "0.7"))));
+    assert!(!warned(&warnings(&with(&light, "tau", "0.55"))));
+    // 1.4 × the fluid (measured for 1.25 and 1.5: stable to 1.2, diverged at 2): refused at 2, warned at 1.5,
+    // silent at 1.2.
+    let mid = with(&tv, "grain_density", "1.4");
+    refused_by_both(
+        &with(&mid, "tau", "2.0"),
+        "terminal_velocity.solid_operator",
+    );
+    assert!(warned(&warnings(&with(&mid, "tau", "1.5"))));
+    assert!(!warned(&warnings(&with(&mid, "tau", "1.2"))));
+    // Rock grains (2.65) at τ = 2: no warning.
+    assert!(!warned(&warnings(&with(&tv, "tau", "2.0"))));
+}
