@@ -32,7 +32,7 @@ fn launched_disc(speed: f64) -> CoupledWorld {
         no_tension: true,
     };
     let mut dem = DemWorld::new(vec![disc], model, 1.0).unwrap();
-    dem.local_damping = 0.0; // local damping removes momentum on its own (REFERENCE §7.3): off for this check
+    dem.local_damping = 0.0; // local damping removes momentum on its own (docs/references.md §7.3): off for this check
     CoupledWorld::new(
         fluid,
         dem,

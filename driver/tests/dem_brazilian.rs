@@ -1,4 +1,4 @@
-//! Brazilian (diametral compression) test of a bonded 2-D disc assembly (REFERENCE §7.4: σ_t = 2P/(πD) per unit
+//! Brazilian (diametral compression) test of a bonded 2-D disc assembly (docs/references.md §7.4: σ_t = 2P/(πD) per unit
 //! thickness; the bonded-particle model's known excess tensile strength, UCS/σ_t ≈ 4–8 against ≈ 20 in rock).
 //!
 //! The sample: the ch. 6.6 discs (radius 0.07–0.11 cm, seed 1) packed by the ch. 2 procedure in a 3 × 3 cm box
@@ -16,7 +16,7 @@
 //! 10 of them before the peak (local breakage at the platen contacts). Halving the platen speed changed the
 //! peak by 0.8 % (576.7, measured once; not asserted, to keep the test fast). UCS of the bonded 3 × 3 cm square
 //! (same packing, same bonds, `run_compression` as in `dem_validation.rs`) = 729.9 dyne/cm², so
-//! UCS/σ_t = 5.52, inside the BPM's 4–8 (REFERENCE §7.4), far below rock's ≈ 20.
+//! UCS/σ_t = 5.52, inside the BPM's 4–8 (docs/references.md §7.4), far below rock's ≈ 20.
 use std::sync::OnceLock;
 
 use lbdem::engine::dem::*;
@@ -150,7 +150,7 @@ fn tensile_strength_doubles_with_bond_strength() {
         strong.tensile_strength,
         weak.tensile_strength / BOND_STRENGTH
     );
-    // σ_t ∝ σ̄_c at fixed packing (REFERENCE §7.4 scaling), to ±12.5 %, wider than the uniaxial test's 5 %:
+    // σ_t ∝ σ̄_c at fixed packing (docs/references.md §7.4 scaling), to ±12.5 %, wider than the uniaxial test's 5 %:
     // (a) the installed stress released on carving leaves a locked-in bond pre-stress that does not scale
     // with the bond strength (it weakens the weak disc relatively more, pushing the ratio above 2);
     // (b) the peak follows a few local breaks at the platen contacts and the splitting crack's start, so

@@ -1,6 +1,6 @@
 //! Validation of the dry bonded-particle model orchestrated by `lbdem::solid` (issue 3): scaling of the
 //! elastic modulus with the contact/bond stiffness, of the uniaxial strength with the bond strength, and the
-//! rise of the failure-envelope slope with friction (REFERENCE §7.4, dissertation ch. 2); determinism; the
+//! rise of the failure-envelope slope with friction (docs/references.md §7.4, dissertation ch. 2); determinism; the
 //! critical-step refusal.
 //!
 //! The sample: ≈ 250 discs (radius 0.07–0.11 cm, ch. 6.6 sizes) packed by the ch. 2 procedure in a 2 × 4 cm
@@ -12,7 +12,7 @@
 //! Direct tension by stress control through the boundary particles (the fracture test's loading path; the
 //! Brazilian test itself is in `dem_brazilian.rs`): σ_t 371 → 778.5 dyne/cm² when σ̄_c, τ̄_c double (×2.10) in a
 //! `-p lbdem` build, 229 → 420 (×1.83) in a workspace build (roundoff-sensitive, see the test); UCS/σ_t ≈ 2–3
-//! (the BPM's known deficiency: too strong in tension, REFERENCE §7.4).
+//! (the BPM's known deficiency: too strong in tension, docs/references.md §7.4).
 //!
 //! Measured (f64; `cargo test --workspace`, in brackets `cargo test -p lbdem`, as first measured when the two
 //! builds differed in the last bit of sin/cos/hypot through feature unification of num-traits — failure
@@ -96,7 +96,7 @@ fn youngs_modulus_doubles_with_contact_and_bond_stiffness() {
         "E = {:.4e} -> {:.4e} dyne/cm^2, ratio {ratio:.4}",
         soft.youngs_modulus, stiff.youngs_modulus
     );
-    // 5 %: the quasi-static bonded model is linear in the stiffnesses (E ∝ E_c, REFERENCE §7.4), but the
+    // 5 %: the quasi-static bonded model is linear in the stiffnesses (E ∝ E_c, docs/references.md §7.4), but the
     // installed isotropic stress (fixed contact overlaps) becomes a doubled pre-stress, and at the same platen
     // speed the stiffer sample is loaded relatively faster (its wave crossing time falls by √2).
     assert!((ratio - 2.0).abs() < 0.1, "E ratio {ratio}");
@@ -115,7 +115,7 @@ fn uniaxial_strength_doubles_with_bond_strength_and_bonds_break() {
         weak.peak_strain,
         weak.peak_stress / BOND_STRENGTH
     );
-    // 5 %: UCS ∝ σ̄_c at fixed packing and τ̄_c/σ̄_c when E_c/σ̄_c ≫ 1 (REFERENCE §7.4); here E_c/σ̄_c = 100, the
+    // 5 %: UCS ∝ σ̄_c at fixed packing and τ̄_c/σ̄_c when E_c/σ̄_c ≫ 1 (docs/references.md §7.4); here E_c/σ̄_c = 100, the
     // installed hydrostatic stress (50 dyne/cm, ≈ 7 % of the UCS) does not scale with the bond strength, and
     // failure strains of 0.8–1.8 % add geometric non-linearity.
     assert!((ratio - 2.0).abs() < 0.1, "UCS ratio {ratio}");

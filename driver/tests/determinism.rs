@@ -1,5 +1,5 @@
 //! Same scene ⇒ bitwise-identical results whatever the number of threads, the band size, or the instruction
-//! set the bulk pass is compiled for (DESIGN §4).
+//! set the bulk pass is compiled for (`driver/src/engine/exec.rs`).
 use lbdem::engine::exec::SimdLevel;
 use lbdem::engine::lattice::{FluidDisc, FluidLattice, Streaming};
 use lbdem_kernels::fluid::boundary::{Boundaries, SideCondition};

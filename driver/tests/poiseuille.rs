@@ -1,5 +1,5 @@
 //! Validation of the fluid kernels on plane Poiseuille flow (dissertation §4.5, fig. 4.4–4.7;
-//! `../shared/REFERENCE.md` §4.1).
+//! `docs/references.md` §4.1).
 //!
 //! With half-way bounce-back and BGK, the steady LB solution of the body-force-driven channel is exactly the
 //! parabola plus a uniform slip u_slip = (g/ν)(16Λ − 3)/24, Λ = (τ − ½)² (He et al. 1997; Ginzburg &

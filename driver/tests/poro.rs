@@ -44,7 +44,7 @@ fn free_disc_conserves_momentum_exactly_and_reaches_the_sangani_acrivos_slip() {
     assert!(o.slip_drift.abs() < 1e-3, "slip drift {}", o.slip_drift);
     // Stokes regime (Re_D ~ 0.1: inertial corrections O(Re²) < 0.1 %).
     assert!(o.reynolds < 0.2, "Re {}", o.reynolds);
-    // F/(μU) against S&A 51.53 at c = 0.2: the fixed-disc PSM drag at l = 40, τ ≈ 0.8 is −1.1 % (REFERENCE §1.5);
+    // F/(μU) against S&A 51.53 at c = 0.2: the fixed-disc PSM drag at l = 40, τ ≈ 0.8 is −1.1 % (docs/references.md §1.5);
     // measured −1.2 % here, −0.25 % at l = 80 (scenes/terminal_velocity_full.toml). 3 % allows the coverage of
     // the moving disc to fluctuate and still fails on a missing (1 − c) buoyancy factor (20 %) or a
     // superficial/interstitial mix-up (25 %).
@@ -91,7 +91,7 @@ fn omega3_is_refused_for_a_free_grain_because_it_is_unstable() {
 
 #[test]
 fn slab_series_reproduces_the_reference_table() {
-    // REFERENCE §6.2 table: L = 4.5 cm, c = 7.9 cm²/s; the values are given to 4 digits.
+    // docs/references.md §6.2 table: L = 4.5 cm, c = 7.9 cm²/s; the values are given to 4 digits.
     let l = 4.5;
     for (t, centre, half, near_face) in [
         (0.5, 0.7813, 0.5603, 0.1394),

@@ -1,4 +1,4 @@
-//! Fixed-solid validation of the partially-saturated method (dissertation §5.4–5.5; `../shared/REFERENCE.md`
+//! Fixed-solid validation of the partially-saturated method (dissertation §5.4–5.5; `docs/references.md`
 //! §1, §6.3, §6.4): Stokes drag of a periodic square array of cylinders against Sangani & Acrivos (S&A), the
 //! pressure drop against Reynolds number, Darcy's law and permeability against porosity for a porous slab
 //! between Zou–He pressure boundaries.
@@ -39,7 +39,7 @@ fn diameter(pitch: usize, c: f64) -> f64 {
 
 #[test]
 fn periodic_array_drag_matches_sangani_acrivos_and_improves_with_resolution() {
-    // τ = 0.8 is inside the [0.6, 0.9] band of REFERENCE §1.5, whose in-house PSM results (same method, Ω₁,
+    // τ = 0.8 is inside the [0.6, 0.9] band of docs/references.md §1.5, whose in-house PSM results (same method, Ω₁,
     // sub-cell fractions) give −5.0 %/−5.8 % at l = 20 and −1.1 %/−1.4 % at l = 40 for c = 0.2/0.4 (τ = 0.875).
     for c in [0.2, 0.4] {
         let mut errors = Vec::new();
@@ -63,7 +63,7 @@ fn periodic_array_drag_matches_sangani_acrivos_and_improves_with_resolution() {
                 r.steps,
                 r.drift_per_step
             );
-            // Tolerances (REFERENCE §1.5): ≤ 2 % at ≥ 10 gap nodes (l = 40: gaps 19.8 and 11.4 nodes); at
+            // Tolerances (docs/references.md §1.5): ≤ 2 % at ≥ 10 gap nodes (l = 40: gaps 19.8 and 11.4 nodes); at
             // l = 20 the gaps are 9.9 (c = 0.2, but only D = 10 across the disc) and 5.7 nodes, the "≈ 5 gap
             // nodes" class with ≤ 6 %.
             let tol = if l >= 40 { 0.02 } else { 0.06 };
@@ -103,7 +103,7 @@ fn moving_wall_operator_drag_matches_sangani_acrivos() {
     // it stays bounded in open systems (driver/tests/determinism.rs) where Ω₁ piles up mass. Measured at
     // τ = 0.8: +0.18 %/+1.29 % (l = 20) and +0.78 %/+1.98 % (l = 40) for c = 0.2/0.4: it sits slightly above
     // S&A (its effective solid edge lies a little further out than Ω₁'s) and does not converge further
-    // between l = 20 and 40, so one tolerance for both: the ≤ 2 % class of REFERENCE §1.5 plus 0.5 % margin
+    // between l = 20 and 40, so one tolerance for both: the ≤ 2 % class of docs/references.md §1.5 plus 0.5 % margin
     // for that offset.
     for c in [0.2, 0.4] {
         for l in [20usize, 40] {
@@ -134,7 +134,7 @@ fn moving_wall_operator_drag_matches_sangani_acrivos() {
 #[test]
 fn linearized_operator_drag_matches_sangani_acrivos_like_omega_1() {
     // Ω₁ₗ (the fracture scenes' operator) differs from Ω₁ only by O(Ma²) terms that carry no momentum, so in
-    // Stokes flow its drag must meet Ω₁'s tolerance classes of REFERENCE §1.5 (≤ 6 % at l = 20, ≤ 2 % at
+    // Stokes flow its drag must meet Ω₁'s tolerance classes of docs/references.md §1.5 (≤ 6 % at l = 20, ≤ 2 % at
     // l = 40) and stay within 0.5 % of Ω₁'s drag (Ma ≈ 1e-3 here: the Ma² terms are ~1e-6 of the drag; 0.5 %
     // leaves room for their effect on the steady-state criterion).
     for c in [0.2, 0.4] {
@@ -178,7 +178,7 @@ fn pressure_drop_falls_with_reynolds_and_meets_the_stokes_limit() {
     // τ change would masquerade as inertia); U ≤ 0.011 keeps the gap Mach number near 0.1 at Re = 10. l = 40
     // gives 8.1 nodes across the gap.
     let (l, c) = (40usize, 0.5);
-    let stokes = 532.55 * 2.0 * (c / std::f64::consts::PI).sqrt(); // F̄ D/l = 424.9 (REFERENCE §1.3)
+    let stokes = 532.55 * 2.0 * (c / std::f64::consts::PI).sqrt(); // F̄ D/l = 424.9 (docs/references.md §1.3)
     let mut last = f64::INFINITY;
     let mut products = Vec::new();
     for re in [0.01, 1.0, 10.0] {
@@ -195,7 +195,7 @@ fn pressure_drop_falls_with_reynolds_and_meets_the_stokes_limit() {
         products.push(r.pressure_drop_times_reynolds);
     }
     // Stokes limit at Re ≤ 1: 8 gap nodes lies between the "≈ 5 nodes, ≤ 6 %" and "≥ 10 nodes, ≤ 2 %" classes
-    // of REFERENCE §1.5; assert the 6 % bound.
+    // of docs/references.md §1.5; assert the 6 % bound.
     for p in &products[..2] {
         assert!(
             (p / stokes - 1.0).abs() < 0.06,
@@ -241,7 +241,7 @@ fn darcy_flux_is_linear_in_the_pressure_gradient() {
     // largest flux.
     assert!(r2 >= 0.999, "R² = {r2}");
     assert!(rel.abs() < 0.01, "intercept {rel:e} of the largest flux");
-    // The permeability does not depend on the drive while Re ≪ 1 (REFERENCE §6.4).
+    // The permeability does not depend on the drive while Re ≪ 1 (docs/references.md §6.4).
     let k0 = runs[0].permeability;
     for r in &runs {
         assert!((r.permeability / k0 - 1.0).abs() < 0.01);
@@ -293,7 +293,7 @@ fn permeability_rises_with_porosity_and_fits_kozeny_carman() {
     }
     let ck = fitted_kozeny_constant(&runs);
     eprintln!("fitted Kozeny constant c_K = {ck:.3}");
-    // For square arrays S&A imply c_K = 10.6, 9.4, 9.4, 10.5 at n = 0.5, 0.6, 0.7, 0.8 (REFERENCE §6.3), i.e. a
+    // For square arrays S&A imply c_K = 10.6, 9.4, 9.4, 10.5 at n = 0.5, 0.6, 0.7, 0.8 (docs/references.md §6.3), i.e. a
     // geometric mean of 9.96; with the ≤ 6 % permeability error above the fit must lie within [8.8, 11.3].
     // (Carman's packed-bed value 5, or the dissertation's eq. 5.8 as printed, would be outside.)
     assert!((8.8..=11.3).contains(&ck), "fitted c_K = {ck}");
@@ -329,7 +329,7 @@ fn omega1_mass_creep_into_covered_nodes_leaves_the_drag_unchanged() {
 #[test]
 #[ignore]
 fn full_resolution_drag_for_c_0_2_to_0_6() {
-    // l = 80 puts ≥ 10 nodes across every gap (10.1 at c = 0.6): the ≤ 2 % class of REFERENCE §1.5. Measured
+    // l = 80 puts ≥ 10 nodes across every gap (10.1 at c = 0.6): the ≤ 2 % class of docs/references.md §1.5. Measured
     // −0.16, −0.26, −0.21, −0.63, −1.41 % for c = 0.2…0.6; from l = 40 to 80 the error falls 4.3–6.4×.
     for c in [0.2, 0.3, 0.4, 0.5, 0.6] {
         let coarse = solve_array::<f64>(&ArrayCase::stokes(40, c, 0.8)).expect("healthy run");

@@ -46,7 +46,7 @@ fn bundled_cylinder_array_scenes_run() {
         .map(|r| r["drag"].as_f64().unwrap())
         .collect();
     assert!(drags.windows(2).all(|w| w[1] > w[0]), "{drags:?}");
-    // c = 0.2 and 0.4 at l = 20 are the ≤ 6 % class of REFERENCE §1.5 (gaps 9.9 and 5.7 nodes).
+    // c = 0.2 and 0.4 at l = 20 are the ≤ 6 % class of docs/references.md §1.5 (gaps 9.9 and 5.7 nodes).
     for r in &results[..3] {
         let e = r["drag_error"].as_f64().unwrap();
         assert!(e.abs() < 0.06, "{e}");

@@ -70,7 +70,7 @@ fn quick_study_writes_csv_and_png_and_f64_errors_fall_with_resolution() {
         }
         let err: f64 = r[7].parse().unwrap();
         // Every quick case is resolved well enough to be within 30 % (the coarsest array, l = 10 with 2.9
-        // nodes across the gap, is the worst: REFERENCE §1.5 puts ≈ 3 gap nodes in the tens-of-percent class).
+        // nodes across the gap, is the worst: docs/references.md §1.5 puts ≈ 3 gap nodes in the tens-of-percent class).
         assert!(err > 0.0 && err < 0.3, "error out of range in {r:?}");
         errors
             .entry((r[0].to_string(), r[1].to_string()))

@@ -15,12 +15,12 @@
 //!   f_i^± = ½(f_i ± f_ī), e_i^± = ½(f_i^eq ± f_ī^eq), f_i ← f_i − (f_i⁺ − e_i⁺)/τ⁺ − (f_i⁻ − e_i⁻)/τ⁻ with
 //!   τ⁻ = ½ + Λ/(τ⁺ − ½); Guo's source split into its even and odd parts in c_i, each with its own prefactor:
 //!   S_i = (1 − 1/(2τ⁺)) ½(G_i + G_ī) + (1 − 1/(2τ⁻)) ½(G_i − G_ī), G_i = w_i [3 (c_i − u) + 9 (c_i·u) c_i]·F.
-//! * Noble–Torczynski PSM (dissertation eq. 4.4–4.8, `REFERENCE.md` §2):
+//! * Noble–Torczynski PSM (dissertation eq. 4.4–4.8, docs/references.md §2):
 //!   f_i ← f_i − (1 − B)(f_i − f_i^eq(ρ,u))/τ + Σ_s B_s Ω_{i,s} + (1 − B) S_i with
 //!   Ω_{i,s} = f_ī − f_ī^eq(ρ,u) + f_i^eq(ρ,u_s) − f_i, B = B(min(Σ_s ε_s, 1)) shared as B_s = B ε_s / Σ ε,
 //!   and the force (momentum per step) on solid s, F_s = −B_s Σ_i Ω_{i,s} c_i.
 //! * Zou & He (1997) closures in the transverse-momentum form of Hecht & Harting (2010), written once for a
-//!   side with inward normal n (`REFERENCE.md` §3), and the corner rule of §3.
+//!   side with inward normal n (docs/references.md §3), and the corner rule of §3.
 //! * A full step in push form: stream (half-way bounce-back from obstacle nodes and wall sides), close the
 //!   Zou–He nodes, collide. See [`step`] for how this lines up with the kernels' fused pull step.
 /// Number of discrete velocities.
@@ -632,7 +632,7 @@ pub fn zou_he_velocity(f: &mut Populations, side: Side, u: [f64; 2]) -> f64 {
     rho
 }
 
-/// Corner where two Zou–He sides meet (`REFERENCE.md` §3): with inward normals n_x, n_y and inward diagonal
+/// Corner where two Zou–He sides meet (docs/references.md §3): with inward normals n_x, n_y and inward diagonal
 /// d = n_x + n_y, f_a = f_ā + (2/3)ρ c_a·u for the two axes, f_d = f_d̄ + (1/6)ρ c_d·u, and the two buried
 /// diagonals e (c_e·n_x and c_e·n_y of opposite signs) share what mass remains:
 /// f_e = ½[ρ − Σ_{others} f] + (1/12) ρ c_e·u.

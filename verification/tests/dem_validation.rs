@@ -1,4 +1,4 @@
-//! Kernel-level validation of the DEM against analytical results (REFERENCE §7): binary collisions (contact
+//! Kernel-level validation of the DEM against analytical results (docs/references.md §7): binary collisions (contact
 //! duration, restitution, energy), a disc settling on a wall under gravity, stick/slip on an incline, and the
 //! stability limit of the central-difference scheme. Parameters are the dissertation's table 6.1 (cgs: cm, g,
 //! s, dyne): k_n = 1e5 dyne/cm, k_s = 6e5 dyne/cm, μ = 0.5, radius 0.1 cm; areal density 2.6 g/cm².
@@ -151,7 +151,7 @@ fn restitution_is_recovered_with_the_dashpot() {
             r.restitution,
             r.duration / tc
         );
-        // REFERENCE §7.1: within 1 % at dt ≤ t_c/50, with the dashpot fed the synchronous velocity estimate.
+        // docs/references.md §7.1: within 1 % at dt ≤ t_c/50, with the dashpot fed the synchronous velocity estimate.
         assert!(rel < 0.01, "e = {e}: measured {}", r.restitution);
         // and it converges at second order: a quarter of the step divides the error by ≈ 16 (measured 15–17).
         assert!(

@@ -253,7 +253,7 @@ proptest! {
             prop_assert!((j1[a] - j0[a] - expected).abs() <= tol, "axis {a}");
         }
         if !forced {
-            // REFERENCE.md §2.2–2.3: with Ω₁ or Ω₂ and no forcing, F_s = B_s ρ (u − u_s) for any populations;
+            // docs/references.md §2.2–2.3: with Ω₁ or Ω₂ and no forcing, F_s = B_s ρ (u − u_s) for any populations;
             // Ω₃ hands over twice that; Ω₁ₗ exactly Ω₁'s.
             let factor = if solid == SolidOperator::MovingWallBounceBack { 2.0 } else { 1.0 };
             let (rho, j) = (density(&f), momentum(&f));
@@ -324,7 +324,7 @@ proptest! {
     }
 }
 
-/// REFERENCE.md §2.3 sign test: with Ω₁ and no forcing, a fully covered node (B = 1, ε = 1) at equilibrium
+/// docs/references.md §2.3 sign test: with Ω₁ and no forcing, a fully covered node (B = 1, ε = 1) at equilibrium
 /// with velocity u hands the solid F = ρ (u − u_s): the fluid drags the solid along.
 #[test]
 fn psm_force_on_a_fully_covered_node_drags_the_solid_along() {
@@ -1172,7 +1172,7 @@ proptest! {
 }
 
 /// Body-force-driven Poiseuille flow between half-way bounce-back walls converges to the exact lattice
-/// solution of REFERENCE.md §4.1 (parabola plus the slip (g/ν)(16Λ − 3)/24), for τ on both sides of the
+/// solution of docs/references.md §4.1 (parabola plus the slip (g/ν)(16Λ − 3)/24), for τ on both sides of the
 /// slip-free τ = ½ + √(3/16). The steady LB solution is exact, so the only error is the residual transient
 /// (e^{−νπ²t/H²} after t steps, < 1e−12 here) and roundoff: tolerance 1e−9 of the centreline velocity.
 #[test]
@@ -1448,7 +1448,7 @@ fn bad_trt_parameters_are_refused() {
 }
 
 /// Body-force Poiseuille flow between half-way bounce-back walls with TRT: the steady solution is the parabola
-/// plus the slip (g/ν)(16Λ − 3)/24, now with the TRT Λ (Ginzburg & d'Humières 2003; REFERENCE.md §4.1), so at
+/// plus the slip (g/ν)(16Λ − 3)/24, now with the TRT Λ (Ginzburg & d'Humières 2003; docs/references.md §4.1), so at
 /// fixed Λ the relative error against the parabola is the same at every τ. At Λ = 3/16 the slip vanishes:
 /// the error is zero up to the residual transient (e^{−νπ²t/H²} < 1e−13 after the steps run) and roundoff, so
 /// 1e−10 of the centreline velocity (the bound on τ-independence) at every τ of the acceptance set.
