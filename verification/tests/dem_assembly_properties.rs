@@ -19,7 +19,7 @@
 //! within 64 n ε Σ|term| (Σ|term| the sum of the magnitudes added). Chunked against unsplit: bitwise.
 use lbdem_kernels::dem::assembly::{
     add_bond_forces, add_pair_forces, add_wall_contact_forces, bond_forces, integrate_all,
-    pair_contacts, wall_contacts_scratch_len, wall_loads, AssemblyError, ContactModel, ContactSums,
+    pair_contacts, pair_contacts_placed, wall_contacts_scratch_len, wall_loads, AssemblyError, ContactModel, ContactSums,
     WallBody, WallContactForce, WallLoad,
 };
 use lbdem_kernels::dem::bond::{Bond, BondForce, BondLaw, ParallelBond, PointBond};
@@ -754,4 +754,46 @@ fn bonded_critical_step_adds_the_bond_stiffness() {
         m.bonded_critical_time_step(&ps, &[far], 6.0, &mut kt, &mut kr),
         Err(AssemblyError::BadPair)
     );
+}
+
+proptest! {
+    #![proptest_config(config(256))]
+
+    /// The pair pass skips the closest-approach search where one of its samples already separates the pair
+    /// (`ellipse_sample_separates`), and can take the placed shapes precomputed: neither changes a bit. Each
+    /// slot and history, from random histories, is bitwise the per-contact law applied to `closest_approach`
+    /// (the uncut search), with and without the placed shapes; pairs from touching to well apart.
+    #[test]
+    fn the_separating_sample_cull_and_placed_shapes_change_no_bit(
+        ps in prop::collection::vec(particle(), 2..8),
+        histories in prop::collection::vec(-1.0f64..1.0, 28),
+        spread in prop_oneof![Just(0.3), Just(1.0), Just(2.0)],
+    ) {
+        // Spread the particles out by a random factor: from mostly overlapping to mostly apart.
+        let ps: Vec<Particle<f64>> = ps.into_iter().map(|mut p| { p.position *= spread; p }).collect();
+        let m = model(0.5);
+        let pairs = all_pairs(ps.len());
+        let dt = 1e-5;
+        let mut shear = histories[..pairs.len()].to_vec();
+        let mut slots = vec![ContactForce::zero(); pairs.len()];
+        pair_contacts(&m, &ps, &pairs, &mut shear, dt, &mut slots).expect("valid input");
+        let placed: Vec<_> = ps.iter().map(Particle::placed).collect();
+        let mut shear_p = histories[..pairs.len()].to_vec();
+        let mut slots_p = vec![ContactForce::zero(); pairs.len()];
+        pair_contacts_placed(&m, &ps, &placed, &pairs, &mut shear_p, dt, &mut slots_p).expect("valid input");
+        for (k, &[i, j]) in pairs.iter().enumerate() {
+            let c = closest_approach(&ps[i], &ps[j]);
+            let mut history = histories[k];
+            let one = linear_contact_force(
+                &m.law(ps[i].mass, ps[j].mass), &c,
+                &BodyState::synchronous(&ps[i], dt), &BodyState::synchronous(&ps[j], dt), &mut history, dt,
+            );
+            prop_assert_eq!(format!("{:?}", slots[k]), format!("{:?}", one), "pair {:?}", [i, j]);
+            prop_assert_eq!(format!("{:?}", slots_p[k]), format!("{:?}", one), "pair {:?} (placed)", [i, j]);
+            prop_assert_eq!(shear[k].to_bits(), history.to_bits());
+            prop_assert_eq!(shear_p[k].to_bits(), history.to_bits());
+        }
+        // A placed list shorter than the particles is refused.
+        prop_assert!(pair_contacts_placed(&m, &ps, &placed[..1], &pairs, &mut shear_p, dt, &mut slots_p).is_err());
+    }
 }

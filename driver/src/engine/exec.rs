@@ -240,9 +240,43 @@ pub fn aa_bulk_exec<T: Real>(
     aa_bulk_rows(rows, step, params, collision);
 }
 
+/// Run `op` compiled for `simd`: `op` is inlined into a function carrying the level's `#[target_feature]`, so
+/// the kernels it calls (inlined in turn) are compiled with the level's vector instructions. Used for the
+/// partially-saturated collision of the covered nodes, whose per-node loops over the nine directions the
+/// compiler vectorises. Same bits at every level (see the module documentation). Falls back to the baseline
+/// level if `simd` is not available on this CPU.
+#[inline(always)]
+pub fn with_simd<R>(simd: SimdLevel, op: impl FnOnce() -> R) -> R {
+    #[cfg(target_arch = "x86_64")]
+    {
+        if simd == SimdLevel::Avx512 && SimdLevel::Avx512.available() {
+            // SAFETY: the CPU has AVX-512 F/VL/DQ/BW (checked just above).
+            return unsafe { x86::run_avx512(op) };
+        }
+        if simd == SimdLevel::Avx2 && SimdLevel::Avx2.available() {
+            // SAFETY: the CPU has AVX2 (checked just above).
+            return unsafe { x86::run_avx2(op) };
+        }
+    }
+    let _ = simd;
+    op()
+}
+
 #[cfg(target_arch = "x86_64")]
 mod x86 {
     use super::*;
+
+    /// `op` compiled for AVX2 ([`with_simd`]).
+    #[target_feature(enable = "avx2")]
+    pub(super) fn run_avx2<R>(op: impl FnOnce() -> R) -> R {
+        op()
+    }
+
+    /// `op` compiled for AVX-512 ([`with_simd`]).
+    #[target_feature(enable = "avx512f,avx512vl,avx512dq,avx512bw")]
+    pub(super) fn run_avx512<R>(op: impl FnOnce() -> R) -> R {
+        op()
+    }
 
     /// [`aa_bulk_rows`] compiled for AVX2.
     #[target_feature(enable = "avx2")]

@@ -22,10 +22,10 @@
 //!
 //! Units: as the per-contact kernels (consistent, caller-chosen).
 use super::bond::{Bond, BondForce};
-use super::contact::{closest_approach, wall_contact};
+use super::contact::{disc_disc, ellipse_ellipse, ellipse_sample_separates, wall_contact};
 use super::integrate::{central_difference_step, particle_critical_time_step};
 use super::law::{effective_mass, linear_contact_force, BodyState, ContactForce, ContactLaw};
-use super::shape::{Particle, Wall};
+use super::shape::{Particle, Placed, Shape, Wall};
 use crate::math::Vector;
 use crate::Real;
 
@@ -181,12 +181,47 @@ fn check_bonds<T>(bonds: &[Bond<T>], n: usize) -> Result<(), AssemblyError> {
 }
 
 /// Evaluation pass of the pair contacts: the contact of every pair (exact geometry by
-/// [`closest_approach`], the pair's law from `model`, synchronous velocities) into its own slot of `out`,
+/// [`closest_approach`](super::contact::closest_approach), the pair's law from `model`, synchronous velocities) into its own slot of `out`,
 /// updating the pair's shear history in `shear` (aligned with `pairs`). `shear` and `out` need one entry per
 /// pair. Chunkable: any aligned split of `pairs`, `shear` and `out` gives the same slots.
+///
+/// Pairs with an ellipse that one sample of the closest-approach search already separates
+/// ([`ellipse_sample_separates`]) skip the search: their slot is the inactive contact's, exactly what the
+/// search would have given.
 pub fn pair_contacts<T: Real>(
     model: &ContactModel<T>,
     particles: &[Particle<T>],
+    pairs: &[[usize; 2]],
+    shear: &mut [T],
+    dt: T,
+    out: &mut [ContactForce<T>],
+) -> Result<(), AssemblyError> {
+    pair_contacts_with(model, particles, |i| particles[i].placed(), pairs, shear, dt, out)
+}
+
+/// [`pair_contacts`] with each particle's placed shape (centre, semi-axes, cosine and sine of its orientation)
+/// given: `placed[i]` must be `particles[i].placed()` (computed once per step instead of once per pair; same
+/// bits). `placed` needs an entry for every index the pairs name.
+pub fn pair_contacts_placed<T: Real>(
+    model: &ContactModel<T>,
+    particles: &[Particle<T>],
+    placed: &[Placed<T>],
+    pairs: &[[usize; 2]],
+    shear: &mut [T],
+    dt: T,
+    out: &mut [ContactForce<T>],
+) -> Result<(), AssemblyError> {
+    if placed.len() < particles.len() {
+        return Err(AssemblyError::BufferLength);
+    }
+    pair_contacts_with(model, particles, |i| placed[i], pairs, shear, dt, out)
+}
+
+#[inline(always)]
+fn pair_contacts_with<T: Real>(
+    model: &ContactModel<T>,
+    particles: &[Particle<T>],
+    placed: impl Fn(usize) -> Placed<T>,
     pairs: &[[usize; 2]],
     shear: &mut [T],
     dt: T,
@@ -198,7 +233,22 @@ pub fn pair_contacts<T: Real>(
     check_pairs(pairs, particles.len())?;
     for ((&[i, j], history), slot) in pairs.iter().zip(shear.iter_mut()).zip(out.iter_mut()) {
         let (pi, pj) = (&particles[i], &particles[j]);
-        let c = closest_approach(pi, pj);
+        // The branches of `closest_approach`, with the placed shapes given.
+        let c = match (pi.shape, pj.shape) {
+            (Shape::Disc { radius: ri }, Shape::Disc { radius: rj }) => {
+                disc_disc(pi.position, ri, pj.position, rj)
+            }
+            _ => {
+                let (a, b) = (placed(i), placed(j));
+                if ellipse_sample_separates(&a, &b) {
+                    // What `linear_contact_force` does with an inactive contact.
+                    *history = T::zero();
+                    *slot = ContactForce::zero();
+                    continue;
+                }
+                ellipse_ellipse(&a, &b)
+            }
+        };
         let law = model.law(pi.mass, pj.mass);
         *slot = linear_contact_force(
             &law,

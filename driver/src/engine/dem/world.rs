@@ -5,7 +5,7 @@
 //!
 //! 1. broad phase: [`build_cell_grid`] over the particles' bounding box, [`candidate_pairs`] (bounding circles
 //!    within `margin`), [`carry_contact_history`] (shear forces of persisting contacts);
-//! 2. contacts: [`pair_contacts`] (closest approach + linear contact law per pair), [`add_pair_forces`];
+//! 2. contacts: [`pair_contacts_placed`] (closest approach + linear contact law per pair), [`add_pair_forces`];
 //! 3. bonds: [`bond_forces`] (point bond of eq. 6.13 or Potyondy & Cundall 2004 parallel bond per bond),
 //!    [`add_bond_forces`]; each break recorded as a [`BreakRecord`] (step, position, mode, orientation, load);
 //! 4. platens: [`add_wall_contact_forces`] with each platen's own velocity (a moving wall), [`wall_loads`];
@@ -29,7 +29,7 @@
 //! length of a unit-thickness sample, dyne/cm ≡ dyne/cm² × 1 cm).
 use lbdem_kernels::dem::assembly::{
     add_bond_forces, add_pair_forces, add_wall_contact_forces, bond_forces, integrate_all,
-    pair_contacts, wall_loads, ContactModel, WallBody, WallContactForce, WallLoad,
+    pair_contacts_placed, wall_loads, ContactModel, WallBody, WallContactForce, WallLoad,
 };
 pub use lbdem_kernels::dem::bond::{Bond, BondLaw};
 use lbdem_kernels::dem::bond::{BondForce, BreakMode, ParallelBond, PointBond};
@@ -37,7 +37,7 @@ use lbdem_kernels::dem::contact::closest_approach;
 use lbdem_kernels::dem::grid::{build_cell_grid, candidate_pairs, carry_contact_history, CellGrid};
 use lbdem_kernels::dem::law::ContactForce;
 use lbdem_kernels::dem::servo::ServoLaw;
-use lbdem_kernels::dem::shape::{Particle, Wall};
+use lbdem_kernels::dem::shape::{Particle, Placed, Wall};
 use lbdem_kernels::math::Vector;
 use lbdem_kernels::Real;
 use rayon::prelude::*;
@@ -622,7 +622,9 @@ impl<T: Real> DemWorld<T> {
         let particles = &self.particles;
         const INVALID: &str = "the broad phase's pairs and the bonds join particles of the world";
 
-        // Contacts: the kernel's pair passes, evaluated in parallel chunks, summed in pair order.
+        // Contacts: the kernel's pair passes, evaluated in parallel chunks, summed in pair order; each
+        // particle's placed shape (the sine and cosine of its orientation) once per step, not once per pair.
+        let placed: Vec<Placed<T>> = particles.par_iter().map(Particle::placed).collect();
         self.contact_forces
             .resize(self.pairs.len(), ContactForce::zero());
         self.pairs
@@ -630,7 +632,7 @@ impl<T: Real> DemWorld<T> {
             .zip(self.shear.par_chunks_mut(PARALLEL_CHUNK))
             .zip(self.contact_forces.par_chunks_mut(PARALLEL_CHUNK))
             .try_for_each(|((pairs, shear), out)| {
-                pair_contacts(&model, particles, pairs, shear, dt, out)
+                pair_contacts_placed(&model, particles, &placed, pairs, shear, dt, out)
             })
             .expect(INVALID);
         let sums = add_pair_forces(
