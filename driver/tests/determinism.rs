@@ -334,11 +334,22 @@ fn the_partially_saturated_collision_is_bitwise_the_same_at_every_instruction_se
     for op in operators {
         for streaming in Streaming::ALL {
             for trt in [false, true] {
-                let c64 = if trt { Collision::Trt(Trt::default()) } else { Collision::Bgk };
-                let c32 = if trt { Collision::Trt(Trt::default()) } else { Collision::Bgk };
+                let c64 = if trt {
+                    Collision::Trt(Trt::default())
+                } else {
+                    Collision::Bgk
+                };
+                let c32 = if trt {
+                    Collision::Trt(Trt::default())
+                } else {
+                    Collision::Bgk
+                };
                 let ref64 = run_at(case::<f64>(op, c64, streaming), SimdLevel::Baseline, 60);
                 let ref32 = run_at(case::<f32>(op, c32, streaming), SimdLevel::Baseline, 60);
-                assert!(ref64.iter().all(|v| v.is_finite()), "{op:?} {streaming:?} trt {trt}");
+                assert!(
+                    ref64.iter().all(|v| v.is_finite()),
+                    "{op:?} {streaming:?} trt {trt}"
+                );
                 for &level in &levels[1..] {
                     assert!(
                         bitwise_equal(&ref64, &run_at(case::<f64>(op, c64, streaming), level, 60)),

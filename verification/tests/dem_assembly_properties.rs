@@ -19,8 +19,8 @@
 //! within 64 n ε Σ|term| (Σ|term| the sum of the magnitudes added). Chunked against unsplit: bitwise.
 use lbdem_kernels::dem::assembly::{
     add_bond_forces, add_pair_forces, add_wall_contact_forces, bond_forces, integrate_all,
-    pair_contacts, pair_contacts_placed, wall_contacts_scratch_len, wall_loads, AssemblyError, ContactModel, ContactSums,
-    WallBody, WallContactForce, WallLoad,
+    pair_contacts, pair_contacts_placed, wall_contacts_scratch_len, wall_loads, AssemblyError,
+    ContactModel, ContactSums, WallBody, WallContactForce, WallLoad,
 };
 use lbdem_kernels::dem::bond::{Bond, BondForce, BondLaw, ParallelBond, PointBond};
 use lbdem_kernels::dem::contact::{closest_approach, wall_contact};

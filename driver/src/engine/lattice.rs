@@ -154,15 +154,18 @@ impl BodyCells {
             self.recompute(body, s, bc);
         }
         self.velocities.clear();
-        self.velocities.extend(
-            self.points.iter().map(|&p| {
-                let v = rigid_velocity(body, Vector::from(p));
-                [v[0], v[1]]
-            }),
-        );
+        self.velocities.extend(self.points.iter().map(|&p| {
+            let v = rigid_velocity(body, Vector::from(p));
+            [v[0], v[1]]
+        }));
     }
 
-    fn recompute<T: Real>(&mut self, body: &CoupledBody<f64>, s: &LatticeShape, bc: &Boundaries<T>) {
+    fn recompute<T: Real>(
+        &mut self,
+        body: &CoupledBody<f64>,
+        s: &LatticeShape,
+        bc: &Boundaries<T>,
+    ) {
         self.fractions.clear();
         self.points.clear();
         self.range = body_cell_range(body, s.nx, s.ny);
@@ -1221,9 +1224,7 @@ impl<T: Real> FluidLattice<T> {
                     let own = |k: usize| !mask[covered[k] as usize];
                     if let Some(psm) = &psm {
                         with_simd(simd, || {
-                            for (k, v) in
-                                (*lo..*hi).zip(vals.iter_mut()).filter(|(k, _)| own(*k))
-                            {
+                            for (k, v) in (*lo..*hi).zip(vals.iter_mut()).filter(|(k, _)| own(*k)) {
                                 let n = covered[k] as usize;
                                 let mut f = load_from_rows(band, kind, y0, n % nx, n / nx);
                                 let (a, b) = (offsets[k] as usize, offsets[k + 1] as usize);
@@ -1771,7 +1772,10 @@ mod tests {
             inside + outside > 2 * boundary,
             "{inside} inside, {outside} outside, {boundary} left to the formula"
         );
-        assert!(inside > 10_000 && outside > 10_000, "{inside} inside, {outside} outside");
+        assert!(
+            inside > 10_000 && outside > 10_000,
+            "{inside} inside, {outside} outside"
+        );
     }
 
     #[test]
@@ -1783,7 +1787,12 @@ mod tests {
             shape,
         };
         assert!(EllipseCells::new(&body(BodyShape::Disc { radius: 3.0 })).is_none());
-        for (a, b, angle) in [(0.0, 1.0, 0.0), (2.0, -1.0, 0.0), (f64::NAN, 1.0, 0.0), (2.0, 1.0, f64::INFINITY)] {
+        for (a, b, angle) in [
+            (0.0, 1.0, 0.0),
+            (2.0, -1.0, 0.0),
+            (f64::NAN, 1.0, 0.0),
+            (2.0, 1.0, f64::INFINITY),
+        ] {
             let shape = BodyShape::Ellipse {
                 semi_major: a,
                 semi_minor: b,

@@ -196,7 +196,15 @@ pub fn pair_contacts<T: Real>(
     dt: T,
     out: &mut [ContactForce<T>],
 ) -> Result<(), AssemblyError> {
-    pair_contacts_with(model, particles, |i| particles[i].placed(), pairs, shear, dt, out)
+    pair_contacts_with(
+        model,
+        particles,
+        |i| particles[i].placed(),
+        pairs,
+        shear,
+        dt,
+        out,
+    )
 }
 
 /// [`pair_contacts`] with each particle's placed shape (centre, semi-axes, cosine and sine of its orientation)
