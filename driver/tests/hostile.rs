@@ -5,37 +5,15 @@
 //!
 //! The fuzzer runs `LBDEM_FUZZ_CASES` cases (default 256, a few seconds); for a long campaign:
 //! `LBDEM_FUZZ_CASES=20000 cargo test -p lbdem --test hostile fuzz -- --nocapture`.
+#[path = "common/scene_text.rs"]
+mod scene_text;
+use scene_text::{scene, with, SCENES};
 use std::path::{Path, PathBuf};
 
 use lbdem::app;
 use lbdem::error::LbdemError;
 use lbdem::run::RunOptions;
 use proptest::prelude::*;
-
-const SCENES: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../scenes");
-
-fn scene(name: &str) -> String {
-    std::fs::read_to_string(Path::new(SCENES).join(name)).unwrap()
-}
-
-/// `text` with the value of the first line whose key is `key` replaced by `value`.
-fn with(text: &str, key: &str, value: &str) -> String {
-    let mut done = false;
-    let out: Vec<String> = text
-        .lines()
-        .map(|l| {
-            let k = l.split('=').next().unwrap_or_default().trim();
-            if !done && l.contains('=') && k == key {
-                done = true;
-                format!("{key} = {value}")
-            } else {
-                l.to_string()
-            }
-        })
-        .collect();
-    assert!(done, "no key {key}");
-    out.join("\n") + "\n"
-}
 
 fn scratch(name: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("lbdem-hostile-{}-{name}", std::process::id()));

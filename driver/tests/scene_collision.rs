@@ -4,38 +4,15 @@
 //! operator that is not valid for free grains is refused naming the key and the operator to use. Each refusal is
 //! reached by `check` and by `run` with the same message, before anything is written (the pattern of
 //! `hostile.rs`).
-use std::path::Path;
+#[path = "common/scene_text.rs"]
+mod scene_text;
+use scene_text::{scene, with};
 
 use lbdem::app;
 use lbdem::kinds::channel::Channel;
 use lbdem::kinds::cylinder_array::CylinderArray;
 use lbdem::run::{Case, RunOptions};
 use lbdem_kernels::fluid::collide::{Collision, SolidOperator};
-
-const SCENES: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../scenes");
-
-fn scene(name: &str) -> String {
-    std::fs::read_to_string(Path::new(SCENES).join(name)).unwrap()
-}
-
-/// `text` with the value of the first line whose key is `key` replaced by `value` (the key must exist).
-fn with(text: &str, key: &str, value: &str) -> String {
-    let mut done = false;
-    let out: Vec<String> = text
-        .lines()
-        .map(|l| {
-            let k = l.split('=').next().unwrap_or_default().trim();
-            if !done && l.contains('=') && k == key {
-                done = true;
-                format!("{key} = {value}")
-            } else {
-                l.to_string()
-            }
-        })
-        .collect();
-    assert!(done, "no key {key}");
-    out.join("\n") + "\n"
-}
 
 /// `text` with `line` added right after the line `after` (which must exist).
 fn adding(text: &str, after: &str, line: &str) -> String {
