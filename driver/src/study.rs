@@ -191,7 +191,7 @@ pub fn channel_scene(problem: Problem, ny: usize, precision: Precision) -> Resul
     scene.fluid.spacing = h;
     let nu = scene.fluid.viscosity;
     let mu = scene.fluid.density * nu;
-    let nu_lattice = (CHANNEL_TAU - 0.5) / 3.0;
+    let nu_lattice = crate::units::lattice_viscosity(CHANNEL_TAU);
     let dt = nu_lattice * h * h / nu;
     // Physical centreline speed that is CHANNEL_LATTICE_SPEED in lattice units, and the gradient giving it.
     let u_max = CHANNEL_LATTICE_SPEED * h / dt;

@@ -263,6 +263,31 @@ pub const DENSITY_DROP_WARN: f64 = 0.05;
 /// Relative density variation across the domain above which a run is refused.
 pub const DENSITY_DROP_REFUSE: f64 = 0.2;
 
+/// D2Q9's squared lattice speed of sound c_s² = 1/3 (lattice units, Δx = Δt = 1; Qian, d'Humières & Lallemand
+/// 1992): the lattice equation of state p = c_s² ρ and the BGK viscosity ν = c_s²(τ − ½) both rest on it.
+pub const CS2: f64 = 1.0 / 3.0;
+
+/// c_s² x in lattice units, computed as x/3 (exactly rounded, unlike `CS2 * x`): a lattice density change →
+/// a lattice pressure.
+pub fn cs2_times(x: f64) -> f64 {
+    x / 3.0
+}
+
+/// x / c_s² in lattice units, computed as 3x: a lattice pressure → a lattice density change.
+pub fn over_cs2(x: f64) -> f64 {
+    3.0 * x
+}
+
+/// BGK lattice viscosity ν* = c_s²(τ − ½) of the relaxation time τ.
+pub fn lattice_viscosity(tau: f64) -> f64 {
+    cs2_times(tau - 0.5)
+}
+
+/// The relaxation time τ = ½ + ν*/c_s² of the lattice viscosity ν*.
+pub fn tau_of_lattice_viscosity(nu: f64) -> f64 {
+    0.5 + over_cs2(nu)
+}
+
 /// The conversion between physical and lattice units of one scene.
 #[derive(Clone, Copy, Debug, Serialize)]
 pub struct LatticeUnits {
@@ -355,7 +380,7 @@ impl LatticeUnits {
             density: f.density,
             viscosity: nu,
             tau,
-            lattice_viscosity: (tau - 0.5) / 3.0,
+            lattice_viscosity: lattice_viscosity(tau),
             lattice_speed: c,
             sound_speed: cs,
             compressibility,
@@ -424,7 +449,7 @@ impl LatticeUnits {
 
     /// Physical pressure → lattice density change Δρ* = p/(ρ₀ c_s²) (p = c_s² ρ, eq. 4.3).
     pub fn pressure_to_density_change(&self, p: f64) -> f64 {
-        3.0 * self.pressure_to_lattice(p)
+        over_cs2(self.pressure_to_lattice(p))
     }
 
     /// Every derived figure, one per line, for `check`/`run` start-up output.

@@ -5,20 +5,21 @@
 //!
 //! Every comparison here is exact (bytes or bit patterns): checkpoints store raw IEEE bits and the steps are
 //! deterministic, so no tolerance is needed or allowed.
+#[path = "common/tweaked_demo.rs"]
+mod tweaked_demo;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::sync::Mutex;
+use tweaked_demo::{Tweak, Tweaked};
 
 use lbdem::app::RunOptions;
 use lbdem::engine::coupled::CoupledWorld;
 use lbdem::engine::dem::{boxed_sample, hexagonal_packing, BondSpec, DemWorld, PlatenControl};
-use lbdem::engine::exec::Exec;
 use lbdem::engine::lattice::{FluidDisc, FluidLattice};
 use lbdem::error::LbdemError;
 use lbdem::kinds::coupled_demo::{CoupledDemo, DemoScene, DemoState};
 use lbdem::run::checkpoint::{Checkpoint, Persist, CHECKPOINT_FILE, DIVERGED_FILE, SCENE_COPY};
-use lbdem::run::{Case, CheckpointInterval, Kind, OutputStage, Stop};
-use lbdem::units::UnitLabels;
+use lbdem::run::{Case, CheckpointInterval, Stop};
 use lbdem_kernels::dem::assembly::ContactModel;
 use lbdem_kernels::fluid::boundary::{Boundaries, SideCondition};
 use lbdem_kernels::fluid::collide::{SolidOperator, Weighting};
@@ -449,82 +450,17 @@ fn damaged_or_mismatched_checkpoints_are_refused_with_clear_errors() {
 }
 
 /// The coupled demo, with one fluid population poisoned once 70 steps are done.
-struct PoisonedDemo;
+struct Poison;
 
-impl Kind for PoisonedDemo {
-    const NAME: &'static str = CoupledDemo::NAME;
-    type Scene = <CoupledDemo as Kind>::Scene;
-    type Setup = <CoupledDemo as Kind>::Setup;
-    type State = <CoupledDemo as Kind>::State;
-    fn validate(scene: &Self::Scene) -> lbdem::error::Result<()> {
-        CoupledDemo::validate(scene)
-    }
-    fn setup(scene: &Self::Scene) -> lbdem::error::Result<Self::Setup> {
-        CoupledDemo::setup(scene)
-    }
-    fn budget(
-        scene: &Self::Scene,
-        setup: &Self::Setup,
-    ) -> lbdem::error::Result<lbdem::input::limits::Budget> {
-        CoupledDemo::budget(scene, setup)
-    }
-    fn describe(case: &Case<Self>) -> String {
-        CoupledDemo::describe(&demo(case))
-    }
-    fn units(scene: &Self::Scene) -> UnitLabels {
-        CoupledDemo::units(scene)
-    }
-    fn checkpoint_interval(scene: &Self::Scene) -> CheckpointInterval {
-        CoupledDemo::checkpoint_interval(scene)
-    }
-    fn start(case: &Case<Self>, exec: &Exec) -> lbdem::error::Result<DemoState> {
-        CoupledDemo::start(&demo(case), exec)
-    }
-    fn resume(case: &Case<Self>, s: &mut DemoState, exec: &Exec) -> lbdem::error::Result<()> {
-        CoupledDemo::resume(&demo(case), s, exec)
-    }
-    fn steps_done(s: &DemoState) -> u64 {
-        CoupledDemo::steps_done(s)
-    }
-    fn total_steps(case: &Case<Self>, s: &DemoState) -> Option<u64> {
-        CoupledDemo::total_steps(&demo(case), s)
-    }
-    fn finished(case: &Case<Self>, s: &DemoState) -> bool {
-        CoupledDemo::finished(&demo(case), s)
-    }
-    fn advance(
-        case: &Case<Self>,
-        s: &mut DemoState,
-        dir: Option<&Path>,
-    ) -> lbdem::error::Result<()> {
+impl Tweak for Poison {
+    fn before_chunk(s: &mut DemoState) {
         if s.world.steps() == 70 {
             s.world.fluid.populations_mut()[5 * 40 + 3] = f64::NAN;
         }
-        CoupledDemo::advance(&demo(case), s, dir)
-    }
-    fn health(case: &Case<Self>, s: &DemoState) -> lbdem::error::Result<()> {
-        CoupledDemo::health(&demo(case), s)
-    }
-    fn write_outputs(
-        case: &Case<Self>,
-        s: &DemoState,
-        dir: &Path,
-        stage: OutputStage,
-    ) -> lbdem::error::Result<()> {
-        CoupledDemo::write_outputs(&demo(case), s, dir, stage)
-    }
-    fn results(case: &Case<Self>, s: &DemoState) -> lbdem::error::Result<serde_json::Value> {
-        CoupledDemo::results(&demo(case), s)
     }
 }
 
-fn demo(case: &Case<PoisonedDemo>) -> Case<CoupledDemo> {
-    Case {
-        scene: case.scene.clone(),
-        setup: case.setup.clone(),
-        budget: case.budget.clone(),
-    }
-}
+type PoisonedDemo = Tweaked<Poison>;
 
 #[test]
 fn a_diverging_run_stops_with_a_message_and_keeps_the_last_good_checkpoint() {

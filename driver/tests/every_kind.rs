@@ -203,6 +203,35 @@ checkpoint_interval = 50
     ]
 }
 
+/// The scene with a periodic checkpoint after every chunk (`[run] checkpoint_interval = 1` step), so that a run
+/// held at any step has written at least one periodic checkpoint.
+fn checkpoint_every_chunk(text: &str) -> String {
+    let mut lines: Vec<String> = text
+        .lines()
+        .filter(|l| !l.trim_start().starts_with("checkpoint_interval"))
+        .map(String::from)
+        .collect();
+    match lines
+        .iter()
+        .position(|l| l.trim_start().starts_with("[run]"))
+    {
+        Some(i) => lines.insert(i + 1, "checkpoint_interval = 1".into()),
+        None => lines.extend(["[run]".into(), "checkpoint_interval = 1".into()]),
+    }
+    lines.join("\n") + "\n"
+}
+
+/// Names of the files of `dir` whose name ends with `suffix`.
+fn named(dir: &Path, suffix: &str) -> Vec<String> {
+    let mut v: Vec<String> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| n.ends_with(suffix))
+        .collect();
+    v.sort();
+    v
+}
+
 /// Files of a run directory (name, bytes), without the checkpoint and the summary.
 fn files(dir: &Path) -> Vec<(String, Vec<u8>)> {
     let mut v: Vec<(String, Vec<u8>)> = std::fs::read_dir(dir)
@@ -276,7 +305,7 @@ fn every_kind_stops_on_a_signal_and_resumes_to_identical_outputs() {
     for (k, (kind, text, at)) in scenes.into_iter().enumerate() {
         let dir = scratch(kind);
         let scene = dir.join("scene.toml");
-        std::fs::write(&scene, &text).unwrap();
+        std::fs::write(&scene, checkpoint_every_chunk(&text)).unwrap();
         // Uninterrupted.
         let whole = dir.join("whole");
         let o = run(&scene, &whole, None).wait_with_output().unwrap();
@@ -294,6 +323,26 @@ fn every_kind_stops_on_a_signal_and_resumes_to_identical_outputs() {
             std::thread::sleep(Duration::from_millis(5));
         }
         assert!(marker.exists(), "{kind}: never reached step {at}");
+        // Held after periodic checkpoints (one per chunk), as a SIGKILL could find it: every table the whole
+        // run writes is on disk with its rows so far, and no figure has been drawn (figures are drawn at the
+        // end, on an interrupt and on divergence, not in the stepping loop; snapshots are not figures).
+        let tables = named(&cut, ".csv");
+        assert_eq!(tables, named(&whole, ".csv"), "{kind}: tables at the hold");
+        for t in &tables {
+            let text = std::fs::read_to_string(cut.join(t)).unwrap();
+            assert!(
+                text.lines().count() >= 1,
+                "{kind}: {t} is empty at the hold"
+            );
+        }
+        let figures: Vec<String> = named(&cut, ".png")
+            .into_iter()
+            .filter(|n| !n.starts_with("snapshot_") && !n.starts_with("speed_"))
+            .collect();
+        assert!(
+            figures.is_empty(),
+            "{kind}: figures drawn at a checkpoint: {figures:?}"
+        );
         let signal = if k % 2 == 0 { "-INT" } else { "-TERM" };
         let killed = Command::new("kill")
             .args([signal, &child.id().to_string()])

@@ -7,8 +7,11 @@
 //! `LBDEM_FUZZ_CASES=20000 cargo test -p lbdem --test hostile fuzz -- --nocapture`.
 #[path = "common/scene_text.rs"]
 mod scene_text;
+#[path = "common/tweaked_demo.rs"]
+mod tweaked_demo;
 use scene_text::{scene, with, SCENES};
 use std::path::{Path, PathBuf};
+use tweaked_demo::{Tweak, Tweaked};
 
 use lbdem::app;
 use lbdem::error::LbdemError;
@@ -213,19 +216,34 @@ fn overwrite_empties_lbdems_previous_outputs_and_refuses_foreign_files() {
     let dir = scratch("overwrite");
     let out = dir.join("out");
     app::run_text(DEMO, "demo.toml", &out, &quiet()).unwrap();
-    // An output of an earlier, different run (e.g. more snapshots) must not survive the new run.
-    std::fs::write(out.join("snapshot_0099.png"), b"old").unwrap();
+    // What the run wrote is listed in its manifest.
+    let manifest = std::fs::read_to_string(out.join(lbdem::output::MANIFEST_FILE)).unwrap();
+    for name in ["scene.toml", "checkpoint.bin", "series.csv", "summary.json"] {
+        assert!(manifest.lines().any(|l| l == name), "{name}: {manifest}");
+    }
+    // An output of an earlier, different run (e.g. more snapshots), written (and so listed) by lbdem: it must
+    // not survive the new run.
+    lbdem::output::write_atomic(&out.join("snapshot_0099.png"), b"old").unwrap();
     let mut o = quiet();
     o.overwrite = true;
     app::run_text(DEMO, "demo.toml", &out, &o).unwrap();
     assert!(!out.join("snapshot_0099.png").exists());
     assert!(out.join("summary.json").exists());
-    // A file lbdem did not write: refused, nothing removed.
-    std::fs::write(out.join("notes.txt"), b"mine").unwrap();
+    // The user's own files, even with the extensions of lbdem's outputs: refused naming them, nothing removed.
+    for mine in ["my_measurements.csv", "figure.png", "notes.txt"] {
+        std::fs::write(out.join(mine), b"mine").unwrap();
+        let e = app::run_text(DEMO, "demo.toml", &out, &o).unwrap_err();
+        assert!(matches!(e, LbdemError::ForeignFiles { .. }), "{e}");
+        assert!(e.to_string().contains(mine), "{e}");
+        assert!(out.join(mine).exists() && out.join("summary.json").exists());
+        std::fs::remove_file(out.join(mine)).unwrap();
+    }
+    // A directory lbdem wrote, without its manifest (e.g. deleted by hand): nothing is known to be lbdem's,
+    // so everything is refused rather than guessed at.
+    std::fs::remove_file(out.join(lbdem::output::MANIFEST_FILE)).unwrap();
     let e = app::run_text(DEMO, "demo.toml", &out, &o).unwrap_err();
-    assert!(matches!(e, LbdemError::ForeignFiles { .. }), "{e}");
-    assert!(e.to_string().contains("notes.txt"), "{e}");
-    assert!(out.join("notes.txt").exists() && out.join("summary.json").exists());
+    assert!(e.to_string().contains("series.csv"), "{e}");
+    assert!(out.join("series.csv").exists());
 }
 
 #[test]
@@ -552,82 +570,17 @@ fn checkpoint_bytes() -> &'static [u8] {
 // A non-finite result: the coupled demo with one result forced to NaN (no valid scene is known to produce one
 // since the settings above are refused; the run loop must still catch it).
 
-use lbdem::engine::exec::Exec;
-use lbdem::kinds::coupled_demo::{CoupledDemo, DemoState};
-use lbdem::run::{Case, CheckpointInterval, Kind, OutputStage};
-use lbdem::units::UnitLabels;
+/// The coupled demo with its drag ratio forced to −∞.
+struct NegInfDrag;
 
-struct NanDemo;
-
-fn as_demo(case: &Case<NanDemo>) -> Case<CoupledDemo> {
-    Case {
-        scene: case.scene.clone(),
-        setup: case.setup.clone(),
-        budget: case.budget.clone(),
-    }
-}
-
-impl Kind for NanDemo {
-    const NAME: &'static str = CoupledDemo::NAME;
-    type Scene = <CoupledDemo as Kind>::Scene;
-    type Setup = <CoupledDemo as Kind>::Setup;
-    type State = DemoState;
-    fn validate(scene: &Self::Scene) -> lbdem::error::Result<()> {
-        CoupledDemo::validate(scene)
-    }
-    fn setup(scene: &Self::Scene) -> lbdem::error::Result<Self::Setup> {
-        CoupledDemo::setup(scene)
-    }
-    fn budget(
-        scene: &Self::Scene,
-        setup: &Self::Setup,
-    ) -> lbdem::error::Result<lbdem::input::limits::Budget> {
-        CoupledDemo::budget(scene, setup)
-    }
-    fn describe(case: &Case<Self>) -> String {
-        CoupledDemo::describe(&as_demo(case))
-    }
-    fn units(scene: &Self::Scene) -> UnitLabels {
-        CoupledDemo::units(scene)
-    }
-    fn checkpoint_interval(scene: &Self::Scene) -> CheckpointInterval {
-        CoupledDemo::checkpoint_interval(scene)
-    }
-    fn start(case: &Case<Self>, exec: &Exec) -> lbdem::error::Result<DemoState> {
-        CoupledDemo::start(&as_demo(case), exec)
-    }
-    fn resume(case: &Case<Self>, s: &mut DemoState, exec: &Exec) -> lbdem::error::Result<()> {
-        CoupledDemo::resume(&as_demo(case), s, exec)
-    }
-    fn steps_done(s: &DemoState) -> u64 {
-        CoupledDemo::steps_done(s)
-    }
-    fn total_steps(case: &Case<Self>, s: &DemoState) -> Option<u64> {
-        CoupledDemo::total_steps(&as_demo(case), s)
-    }
-    fn finished(case: &Case<Self>, s: &DemoState) -> bool {
-        CoupledDemo::finished(&as_demo(case), s)
-    }
-    fn advance(case: &Case<Self>, s: &mut DemoState, d: Option<&Path>) -> lbdem::error::Result<()> {
-        CoupledDemo::advance(&as_demo(case), s, d)
-    }
-    fn health(case: &Case<Self>, s: &DemoState) -> lbdem::error::Result<()> {
-        CoupledDemo::health(&as_demo(case), s)
-    }
-    fn write_outputs(
-        case: &Case<Self>,
-        s: &DemoState,
-        dir: &Path,
-        stage: OutputStage,
-    ) -> lbdem::error::Result<()> {
-        CoupledDemo::write_outputs(&as_demo(case), s, dir, stage)
-    }
-    fn results(case: &Case<Self>, s: &DemoState) -> lbdem::error::Result<serde_json::Value> {
-        let mut r = CoupledDemo::results(&as_demo(case), s)?;
+impl Tweak for NegInfDrag {
+    fn results(mut r: serde_json::Value) -> serde_json::Value {
         r["drag_ratio"] = serde_json::json!(f64::NEG_INFINITY);
-        Ok(r)
+        r
     }
 }
+
+type NanDemo = Tweaked<NegInfDrag>;
 
 #[test]
 fn a_non_finite_result_fails_the_run_and_the_summary_still_records_what_was_measured() {
@@ -652,4 +605,49 @@ fn a_non_finite_result_fails_the_run_and_the_summary_still_records_what_was_meas
             > 0.0
     );
     assert!(summary["results"]["drag_ratio"].is_null());
+}
+
+#[test]
+fn a_scene_needing_more_memory_than_available_is_refused_by_check_and_run_with_the_figure_and_the_field(
+) {
+    // The available memory is injected (`LBDEM_MEMORY_LIMIT`, bytes) so that the test does not depend on the
+    // machine; the child processes read it, this process's environment is left alone.
+    let dir = scratch("memory");
+    let path = dir.join("poiseuille.toml");
+    std::fs::write(&path, scene("poiseuille.toml")).unwrap();
+    let out = dir.join("out");
+    let lbdem = |limit: &str, args: &[&str]| {
+        std::process::Command::new(env!("CARGO_BIN_EXE_lbdem"))
+            .args(args)
+            .env("LBDEM_MEMORY_LIMIT", limit)
+            .output()
+            .unwrap()
+    };
+    let (p, o) = (path.to_str().unwrap(), out.to_str().unwrap());
+    // 100 kB available: the 81 x 20 f64 channel lattice needs 480.6 kB.
+    let check = lbdem("100000", &["check", p]);
+    let run = lbdem("100000", &["run", p, "--out", o, "--quiet"]);
+    for o in [&check, &run] {
+        assert!(!o.status.success());
+        let e = String::from_utf8_lossy(&o.stderr);
+        assert!(e.contains("channel.length"), "the field: {e}");
+        assert!(
+            e.contains("480.6 kB") && e.contains("100.0 kB available"),
+            "the figures: {e}"
+        );
+    }
+    assert_eq!(check.stderr, run.stderr, "check and run disagree");
+    assert!(!out.exists(), "run wrote {} before refusing", out.display());
+    // 10 MB available: accepted, and `check` prints the estimate.
+    let check = lbdem("10000000", &["check", p]);
+    assert!(
+        check.status.success(),
+        "{}",
+        String::from_utf8_lossy(&check.stderr)
+    );
+    assert!(
+        String::from_utf8_lossy(&check.stdout).contains("480.6 kB"),
+        "{}",
+        String::from_utf8_lossy(&check.stdout)
+    );
 }

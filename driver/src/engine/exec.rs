@@ -329,6 +329,19 @@ mod x86 {
     }
 }
 
+/// What this process's execution settings apply to (a fluid lattice of any precision): what a kind lists in
+/// `run::Kind::lattices` so that a resumed state runs with this process's SIMD level and streaming scheme.
+pub trait ExecTarget {
+    /// Use `exec`'s settings.
+    fn take(&mut self, exec: &Exec);
+}
+
+impl<T: lbdem_kernels::Real> ExecTarget for crate::engine::lattice::FluidLattice<T> {
+    fn take(&mut self, exec: &Exec) {
+        exec.apply(self);
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

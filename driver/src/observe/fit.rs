@@ -1,6 +1,4 @@
 //! Least-squares fits of measured series: a straight line, and the diffusivity of the slab solution.
-use faer::linalg::solvers::SolveLstsq;
-use faer::Mat;
 use lbdem_reference::analytic::slab_pressure;
 
 /// Least-squares line y = a x + b through the points: (slope a, intercept b, R²).
@@ -26,7 +24,10 @@ pub fn linear_fit(points: &[(f64, f64)]) -> (f64, f64, f64) {
 
 /// Least-squares fit of the diffusivity c to samples (x, t, P/P₀) of the slab solution
 /// ([`lbdem_reference::analytic::slab_pressure`], eq. 5.12): Gauss–Newton on ln c, each linearised problem
-/// J δ = r solved by `faer`'s QR least squares. Returns (c, rms residual, iterations).
+/// J δ = r solved in least squares. The unknown is one number, so the least-squares step is the normal
+/// equation δ = Σ J r / Σ J², summed in sample order: a dense QR (faer's) gives the same step to rounding but
+/// its SIMD reductions start at the allocation's alignment, so its last bits vary from process to process —
+/// and a resumed run must reproduce an uninterrupted one bitwise. Returns (c, rms residual, iterations).
 pub fn fit_diffusivity(
     samples: &[(f64, f64, f64)],
     half_length: f64,
@@ -51,10 +52,14 @@ pub fn fit_diffusivity(
             .map(|&(x, t, _)| slab_pressure(x, t, c, half_length))
             .collect();
         // d model / d ln c = c d model / d c
-        let jac = Mat::<f64>::from_fn(samples.len(), 1, |i, _| c * eval[i].1);
-        let res = Mat::<f64>::from_fn(samples.len(), 1, |i, _| samples[i].2 - eval[i].0);
-        let delta = jac.qr().solve_lstsq(&res);
-        let mut step = delta[(0, 0)].clamp(-1.0, 1.0);
+        let (mut jr, mut jj) = (0.0, 0.0);
+        for (s, e) in samples.iter().zip(&eval) {
+            let j = c * e.1;
+            jr += j * (s.2 - e.0);
+            jj += j * j;
+        }
+        let delta = if jj > 0.0 { jr / jj } else { 0.0 };
+        let mut step = delta.clamp(-1.0, 1.0);
         // Backtrack so the sum of squares never rises.
         let r0 = rms(lnc);
         while rms(lnc + step) > r0 && step.abs() > 1e-12 {

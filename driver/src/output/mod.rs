@@ -23,7 +23,41 @@ pub const SCENE_COPY: &str = "scene.toml";
 /// Name of the summary a finished run writes last.
 pub const SUMMARY_FILE: &str = "summary.json";
 
-/// Write `bytes` to `path` atomically (temporary file + rename).
+/// Name of the manifest of a directory lbdem writes into: the names of the files it wrote there, one per line,
+/// sorted. `--overwrite` removes exactly these (and their temporary files), nothing else.
+pub const MANIFEST_FILE: &str = "lbdem-outputs.txt";
+
+/// One manifest update at a time within this process.
+static MANIFEST_LOCK: std::sync::Mutex<()> = std::sync::Mutex::new(());
+
+/// Record `path`, a file lbdem has just written, in its directory's manifest ([`MANIFEST_FILE`]). Every
+/// writer of outputs calls it ([`write_atomic`] does).
+pub fn record_output(path: &Path) -> Result<()> {
+    let (Some(dir), Some(name)) = (path.parent(), path.file_name()) else {
+        return Ok(());
+    };
+    let name = name.to_string_lossy();
+    if name == MANIFEST_FILE {
+        return Ok(());
+    }
+    let _one = MANIFEST_LOCK.lock().unwrap_or_else(|e| e.into_inner());
+    let manifest = dir.join(MANIFEST_FILE);
+    let text = std::fs::read_to_string(&manifest).unwrap_or_default();
+    let mut names: std::collections::BTreeSet<&str> = text.lines().collect();
+    if !names.insert(&name) {
+        return Ok(());
+    }
+    let listed: String = names.iter().map(|n| format!("{n}\n")).collect();
+    let tmp = dir.join(format!("{MANIFEST_FILE}.tmp"));
+    let err = |e| LbdemError::Write {
+        path: manifest.display().to_string(),
+        source: e,
+    };
+    std::fs::write(&tmp, listed).map_err(err)?;
+    std::fs::rename(&tmp, &manifest).map_err(err)
+}
+
+/// Write `bytes` to `path` atomically (temporary file + rename), and record it in the directory's manifest.
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
     let tmp: PathBuf = {
         let mut name = path
@@ -38,7 +72,8 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
         source: e,
     };
     std::fs::write(&tmp, bytes).map_err(err)?;
-    std::fs::rename(&tmp, path).map_err(err)
+    std::fs::rename(&tmp, path).map_err(err)?;
+    record_output(path)
 }
 
 /// Prepare an output directory: create it, and refuse one that holds a previous run (finished:
@@ -67,25 +102,23 @@ pub fn start_run_dir(dir: &Path, scene_text: &str, overwrite: bool) -> Result<()
     write_atomic(&dir.join(SCENE_COPY), scene_text.as_bytes())
 }
 
-/// Extensions of the files lbdem writes into a run directory (tables, figures, snapshots, the summary, the
-/// scene copy, checkpoints, and the temporary files of atomic writes). Every output is a file directly in the
-/// run directory.
-pub const OUTPUT_EXTENSIONS: [&str; 10] = [
-    "csv", "png", "vtk", "vtp", "vti", "pvd", "json", "bin", "toml", "tmp",
-];
-
-/// Whether `entry` of a run directory looks like one of lbdem's outputs (a file with an output extension).
-fn is_output(entry: &std::fs::DirEntry) -> bool {
-    let is_file = entry.file_type().is_ok_and(|t| t.is_file());
-    let ext = entry
-        .path()
-        .extension()
-        .map(|e| e.to_string_lossy().into_owned());
-    is_file && ext.is_some_and(|e| OUTPUT_EXTENSIONS.contains(&e.as_str()))
+/// Whether the directory entry `name` is one lbdem wrote according to the manifest `listed`: a listed file, the
+/// manifest itself, or the temporary file of one of them (`NAME.tmp`, or `STEM.tmp.png` for figures) left by
+/// an interrupted write.
+fn is_listed(name: &str, listed: &std::collections::BTreeSet<&str>) -> bool {
+    if name == MANIFEST_FILE || listed.contains(name) {
+        return true;
+    }
+    let of_tmp = name
+        .strip_suffix(".tmp")
+        .map(str::to_string)
+        .or_else(|| name.strip_suffix(".tmp.png").map(|s| format!("{s}.png")));
+    of_tmp.is_some_and(|n| n == MANIFEST_FILE || listed.contains(n.as_str()))
 }
 
-/// `--overwrite`: remove a previous run's outputs from `dir`, refusing (and removing nothing) when the
-/// directory holds anything else (a subdirectory, a file of another type): files lbdem did not write.
+/// `--overwrite`: remove a previous run's outputs from `dir` (the files its manifest, [`MANIFEST_FILE`], lists),
+/// refusing (and removing nothing) when the directory holds anything else: files lbdem did not write, whatever
+/// their extension, and subdirectories.
 fn empty_run_dir(dir: &Path) -> Result<()> {
     let err = |e| LbdemError::Write {
         path: dir.display().to_string(),
@@ -95,9 +128,14 @@ fn empty_run_dir(dir: &Path) -> Result<()> {
         .map_err(err)?
         .collect::<std::io::Result<_>>()
         .map_err(err)?;
+    let manifest = std::fs::read_to_string(dir.join(MANIFEST_FILE)).unwrap_or_default();
+    let listed: std::collections::BTreeSet<&str> = manifest.lines().collect();
     let foreign: Vec<String> = entries
         .iter()
-        .filter(|e| !is_output(e))
+        .filter(|e| {
+            let is_file = e.file_type().is_ok_and(|t| t.is_file());
+            !(is_file && is_listed(&e.file_name().to_string_lossy(), &listed))
+        })
         .map(|e| e.file_name().to_string_lossy().into_owned())
         .collect();
     if !foreign.is_empty() {

@@ -232,7 +232,8 @@ pub fn loglog_png(path: &Path, plot: &LogLogPlot, series: &[Series]) -> Result<(
     std::fs::rename(&tmp, path).map_err(|e| LbdemError::Write {
         path: path.display().to_string(),
         source: e,
-    })
+    })?;
+    crate::output::record_output(path)
 }
 
 /// Tick label of a log axis: plain decimals between 1e-3 and 1e4, scientific notation outside.

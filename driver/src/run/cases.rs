@@ -100,3 +100,140 @@ impl<R: CaseRun> Cases<R> {
         self.current.as_ref().map_or(Ok(()), R::health)
     }
 }
+
+/// The cases of a sweep kind in the scene's precision (the same runs, `A` in `f32` and `B` in `f64`): what
+/// such a kind checkpoints.
+#[derive(Serialize, Deserialize)]
+#[serde(bound(
+    serialize = "A: Serialize, A::Outcome: Serialize, B: Serialize, B::Outcome: Serialize",
+    deserialize = "A: DeserializeOwned, A::Outcome: DeserializeOwned, B: DeserializeOwned, \
+                   B::Outcome: DeserializeOwned"
+))]
+pub enum Sweep<A: CaseRun, B: CaseRun> {
+    /// precision = "f32".
+    F32(Cases<A>),
+    /// precision = "f64".
+    F64(Cases<B>),
+}
+
+macro_rules! both {
+    ($sweep:expr, $c:ident => $body:expr) => {
+        match $sweep {
+            Sweep::F32($c) => $body,
+            Sweep::F64($c) => $body,
+        }
+    };
+}
+
+impl<C, O: Clone, A, B> Sweep<A, B>
+where
+    A: CaseRun<Case = C, Outcome = O>,
+    B: CaseRun<Case = C, Outcome = O>,
+{
+    /// No case run yet, in `f32` when `single` (else `f64`).
+    pub fn new(single: bool, exec: &Exec) -> Self {
+        if single {
+            Sweep::F32(Cases::new(exec))
+        } else {
+            Sweep::F64(Cases::new(exec))
+        }
+    }
+
+    /// [`Cases::resume`].
+    pub fn resume(&mut self, exec: &Exec) {
+        both!(self, c => c.resume(exec))
+    }
+
+    /// [`Cases::steps`].
+    pub fn steps(&self) -> u64 {
+        both!(self, c => c.steps())
+    }
+
+    /// [`Cases::finished`].
+    pub fn finished(&self, cases: usize) -> bool {
+        both!(self, c => c.finished(cases))
+    }
+
+    /// [`Cases::advance`].
+    pub fn advance(&mut self, cases: &[C]) -> Result<()> {
+        both!(self, c => c.advance(cases))
+    }
+
+    /// [`Cases::health`].
+    pub fn health(&self) -> Result<()> {
+        both!(self, c => c.health())
+    }
+
+    /// Outcomes of the finished cases, in order.
+    pub fn done(&self) -> &[O] {
+        both!(self, c => &c.done)
+    }
+}
+
+impl<A, B> crate::run::Persist for Sweep<A, B>
+where
+    A: CaseRun + Serialize + DeserializeOwned,
+    B: CaseRun + Serialize + DeserializeOwned,
+    A::Outcome: Serialize + DeserializeOwned,
+    B::Outcome: Serialize + DeserializeOwned,
+{
+    const PRECISION: u8 = 0;
+    fn precision(&self) -> u8 {
+        match self {
+            Sweep::F32(_) => 4,
+            Sweep::F64(_) => 8,
+        }
+    }
+}
+
+/// The [`crate::run::Kind`] methods every sweep kind shares (`start`, `resume`, `steps_done`, `total_steps`,
+/// `finished`, `advance`, `health`), for a kind whose state is a [`Sweep`], whose set-up lists its cases as
+/// `cases` (each with its step limit `max_steps`) and whose scene has the `[scene]` header as `scene`.
+macro_rules! sweep_kind_methods {
+    () => {
+        fn start(
+            case: &$crate::run::Case<Self>,
+            exec: &$crate::engine::exec::Exec,
+        ) -> $crate::error::Result<Self::State> {
+            let single = case.scene.scene.precision.float_bytes() == 4;
+            Ok($crate::run::cases::Sweep::new(single, exec))
+        }
+
+        fn resume(
+            _case: &$crate::run::Case<Self>,
+            state: &mut Self::State,
+            exec: &$crate::engine::exec::Exec,
+        ) -> $crate::error::Result<()> {
+            state.resume(exec);
+            Ok(())
+        }
+
+        fn steps_done(state: &Self::State) -> u64 {
+            state.steps()
+        }
+
+        fn total_steps(case: &$crate::run::Case<Self>, _state: &Self::State) -> Option<u64> {
+            Some(case.setup.cases.iter().map(|c| c.max_steps).sum())
+        }
+
+        fn finished(case: &$crate::run::Case<Self>, state: &Self::State) -> bool {
+            state.finished(case.setup.cases.len())
+        }
+
+        fn advance(
+            case: &$crate::run::Case<Self>,
+            state: &mut Self::State,
+            _dir: Option<&std::path::Path>,
+        ) -> $crate::error::Result<()> {
+            state.advance(&case.setup.cases)
+        }
+
+        fn health(
+            _case: &$crate::run::Case<Self>,
+            state: &Self::State,
+        ) -> $crate::error::Result<()> {
+            state.health()
+        }
+    };
+}
+pub(crate) use sweep_kind_methods;

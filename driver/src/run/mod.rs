@@ -20,7 +20,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 use serde::de::DeserializeOwned;
 use serde::Serialize;
 
-use crate::engine::exec::Exec;
+use crate::engine::exec::{Exec, ExecTarget};
 use crate::error::{LbdemError, Result};
 use crate::input::limits::Budget;
 use crate::output::summary::{Execution, Summary};
@@ -28,7 +28,7 @@ use crate::output::{
     read_scene_copy, start_run_dir, write_atomic, CHECKPOINT_FILE, DIVERGED_FILE, SCENE_COPY,
     SUMMARY_FILE,
 };
-use crate::units::UnitLabels;
+use crate::units::UnitSystem;
 
 pub mod cases;
 pub mod checkpoint;
@@ -89,10 +89,29 @@ impl<K: Kind> Case<K> {
         let mut s = format!("scene {path} is valid (kind = {})\n", K::NAME);
         s += &K::describe(self);
         s += &self.budget.describe();
-        for w in K::warnings(self) {
+        for w in self.setup.warnings() {
             s += &format!("  WARNING: {w}\n");
         }
         s
+    }
+}
+
+/// The sections every scene file has, as the run loop and the summary read them: `[scene] units` and `[run]
+/// checkpoint_interval`. `crate::scene::scene_file!` implements it for a scene type with the usual fields
+/// `scene` (`SceneHeader`) and `run` (`RunSection` or `CheckpointSection`).
+pub trait SceneFile: Serialize + DeserializeOwned + Sync {
+    /// `[scene] units`: the unit system of the scene's values (labels of the outputs).
+    fn unit_system(&self) -> UnitSystem;
+    /// `[run] checkpoint_interval`.
+    fn checkpoint_interval(&self) -> CheckpointInterval;
+}
+
+/// What every kind's set-up carries besides its own figures: warnings about the settings (printed at
+/// start-up and by `lbdem check`, listed in the summary). None unless the set-up says otherwise.
+pub trait Derived: Serialize + Sync {
+    /// The warnings.
+    fn warnings(&self) -> &[String] {
+        &[]
     }
 }
 
@@ -106,9 +125,9 @@ pub trait Kind: Sized + 'static {
     /// `[scene] kind` of its scene files, and the kind tag of its checkpoints.
     const NAME: &'static str;
     /// The scene file (TOML, `deny_unknown_fields`).
-    type Scene: Serialize + DeserializeOwned + Sync;
+    type Scene: SceneFile;
     /// What is derived from the scene before running (printed by `lbdem check`, `derived` in the summary).
-    type Setup: Serialize + Sync;
+    type Setup: Derived;
     /// Everything a run needs to continue bitwise exactly: what checkpoints hold.
     type State: Persist + Send;
     /// Names of result keys (the last segment of a `results` path) whose value may be `null` meaning "not
@@ -128,18 +147,27 @@ pub trait Kind: Sized + 'static {
     fn budget(scene: &Self::Scene, setup: &Self::Setup) -> Result<Budget>;
     /// The derived figures, one per line, indented by two spaces.
     fn describe(case: &Case<Self>) -> String;
-    /// Warnings about the settings (printed at start-up, listed in the summary).
-    fn warnings(_case: &Case<Self>) -> Vec<String> {
-        Vec::new()
-    }
-    /// Unit labels of the scene's values.
-    fn units(scene: &Self::Scene) -> UnitLabels;
-    /// `[run] checkpoint_interval` of the scene.
-    fn checkpoint_interval(scene: &Self::Scene) -> CheckpointInterval;
     /// Build the initial state (allocate, pack, settle: everything before the first chunk).
     fn start(case: &Case<Self>, exec: &Exec) -> Result<Self::State>;
-    /// Take over a state loaded from a checkpoint (apply this process's execution settings).
-    fn resume(case: &Case<Self>, state: &mut Self::State, exec: &Exec) -> Result<()>;
+    /// The fluid lattices of a state (none for a dry kind): [`Kind::resume`] applies this process's execution
+    /// settings (SIMD level, streaming scheme) to them.
+    fn lattices(_state: &mut Self::State) -> Vec<&mut dyn ExecTarget> {
+        Vec::new()
+    }
+    /// Check that a state loaded from a checkpoint fits the scene (beyond what the checksum guarantees), with
+    /// [`LbdemError::Checkpoint`] naming what does not. Nothing to check by default.
+    fn check_resumed(_case: &Case<Self>, _state: &Self::State) -> Result<()> {
+        Ok(())
+    }
+    /// Take over a state loaded from a checkpoint: [`Kind::check_resumed`], then this process's execution
+    /// settings on [`Kind::lattices`].
+    fn resume(case: &Case<Self>, state: &mut Self::State, exec: &Exec) -> Result<()> {
+        Self::check_resumed(case, state)?;
+        for lattice in Self::lattices(state) {
+            lattice.take(exec);
+        }
+        Ok(())
+    }
     /// Steps done so far (progress, checkpoint header).
     fn steps_done(state: &Self::State) -> u64;
     /// Expected total steps (progress bar, ETA), if known.
@@ -329,9 +357,9 @@ fn drive<K: Kind>(
                 kind: K::NAME,
                 scene_file: segment.path.to_string(),
                 scene: serde_json::to_value(&case.scene).unwrap_or_default(),
-                units: K::units(&case.scene),
+                units: case.scene.unit_system().labels(),
                 derived: serde_json::to_value(&case.setup).unwrap_or_default(),
-                warnings: K::warnings(case),
+                warnings: case.setup.warnings().to_vec(),
                 execution: Execution::of(&opts.exec),
                 steps: K::steps_done(&state),
                 segment_first_step: segment.first_step,
@@ -416,7 +444,7 @@ fn drive_loop<K: Kind>(
     );
     bar.set_position(K::steps_done(state));
     bar.reset_eta();
-    let interval = K::checkpoint_interval(&case.scene);
+    let interval = case.scene.checkpoint_interval();
     let mut last_step = K::steps_done(state);
     let mut last_time = Instant::now();
     let mut held = false;

@@ -33,6 +33,22 @@ pub use crate::input::limits;
 
 pub use crate::units::{FluidSection, UnitLabels, UnitSystem};
 
+/// Implements [`crate::run::SceneFile`] for scene file types whose shared sections are the fields `scene`
+/// ([`SceneHeader`]) and `run` ([`RunSection`] or [`CheckpointSection`]).
+macro_rules! scene_file {
+    ($($t:ty),+) => {$(
+        impl $crate::run::SceneFile for $t {
+            fn unit_system(&self) -> $crate::units::UnitSystem {
+                self.scene.units
+            }
+            fn checkpoint_interval(&self) -> $crate::run::CheckpointInterval {
+                self.run.checkpoint_interval
+            }
+        }
+    )+};
+}
+pub(crate) use scene_file;
+
 /// Floating-point precision of the kernels.
 #[derive(Clone, Copy, Debug, Deserialize, Serialize, PartialEq, Eq, Default)]
 #[serde(rename_all = "lowercase")]
@@ -184,6 +200,12 @@ pub struct UnitsSetup {
     pub units: crate::units::LatticeUnits,
     /// Warnings about the relaxation time.
     pub warnings: Vec<String>,
+}
+
+impl crate::run::Derived for UnitsSetup {
+    fn warnings(&self) -> &[String] {
+        &self.warnings
+    }
 }
 
 impl UnitsSetup {

@@ -15,7 +15,7 @@ pub fn lattice_channel(
     steps: u64,
     tol: f64,
 ) -> ChannelScene {
-    let nu = (tau - 0.5) / 3.0;
+    let nu = lbdem::units::lattice_viscosity(tau);
     let (length, key) = match drive {
         "pressure" => ((nx - 1) as f64, "pressure_drop"),
         _ => (nx as f64, "acceleration"),

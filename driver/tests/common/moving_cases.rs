@@ -15,11 +15,8 @@
 //!   `CoupledWorld`, with the drive scaled so that Re stays at the scene's ≈ 0.1 at every τ and the run long
 //!   enough for 12 e-foldings of the slowest viscous mode.
 #![allow(dead_code)]
-use lbdem::engine::coupled::{CoupledWorld, LatticeMap};
-use lbdem::engine::dem::DemWorld;
 use lbdem::engine::lattice::FluidLattice;
-use lbdem_kernels::dem::assembly::ContactModel;
-use lbdem_kernels::dem::shape::Particle;
+use lbdem::kinds::terminal_velocity::{fluid_weight, free_disc_world, total_momentum};
 use lbdem_kernels::fluid::boundary::{Boundaries, SideCondition};
 use lbdem_kernels::fluid::collide::{Collision, SolidOperator, Trt, Weighting};
 use lbdem_kernels::fluid::step::FluidParams;
@@ -86,21 +83,6 @@ impl Method {
         match self.magic {
             None => format!("{op} (BGK)"),
             Some(m) => format!("{op} (TRT Λ={m})"),
-        }
-    }
-
-    /// The weight B(ε) the collision uses (what the body force is weighted by, 1 − B).
-    pub fn weight(&self, eps: f64, tau: f64) -> f64 {
-        match self.solid {
-            SolidOperator::LambdaConsistent => {
-                let c = self.collision();
-                lbdem_kernels::fluid::collide::lambda_weighting(
-                    self.weighting,
-                    eps,
-                    c.rates(tau).expect("valid rates"),
-                )
-            }
-            _ => lbdem_kernels::fluid::collide::weighting(self.weighting, eps, tau),
         }
     }
 }
@@ -170,7 +152,7 @@ fn rows(l: &FluidLattice<f64>) -> Option<Vec<f64>> {
 pub fn couette(m: Method, tau: f64, phi: f64) -> Outcome {
     let (h, s) = (COUETTE_ROWS, SLAB_ROWS);
     let ny = 2 * h + s;
-    let nu = (tau - 0.5) / 3.0;
+    let nu = lbdem::units::lattice_viscosity(tau);
     let mut l = lattice(2, ny, channel_sides(), tau, [0.0; 2], m);
     l.cover_with_field(
         |_, y| {
@@ -241,7 +223,7 @@ pub fn stokes_first_problem(m: Method, tau: f64) -> Outcome {
     let s = SLAB_ROWS;
     let h = (5.0 * STOKES_LENGTH) as usize;
     let ny = 2 * h + s;
-    let nu = (tau - 0.5) / 3.0;
+    let nu = lbdem::units::lattice_viscosity(tau);
     let mut l = lattice(2, ny, channel_sides(), tau, [0.0; 2], m);
     l.cover_with_field(
         |_, y| if (h..h + s).contains(&y) { 1.0 } else { 0.0 },
@@ -287,7 +269,7 @@ pub fn stokes_first_problem(m: Method, tau: f64) -> Outcome {
 pub fn touching_wall(m: Method, tau: f64) -> Outcome {
     let (h, s) = (COUETTE_ROWS, SLAB_ROWS);
     let ny = h + s;
-    let nu = (tau - 0.5) / 3.0;
+    let nu = lbdem::units::lattice_viscosity(tau);
     let mut l = lattice(2, ny, channel_sides(), tau, [0.0; 2], m);
     l.cover_with_field(
         |_, y| if y < s { 1.0 } else { 0.0 },
@@ -324,41 +306,23 @@ pub fn free_disc(m: Method, tau: f64, density: f64) -> Outcome {
     let l = n as f64;
     let c = 0.2;
     let radius = l * (c / std::f64::consts::PI).sqrt();
-    let nu = (tau - 0.5) / 3.0;
+    let nu = lbdem::units::lattice_viscosity(tau);
     let force = 2.1e-3 * (nu / 0.1).powi(2);
     let steps = (12.0 * l * l / (4.0 * std::f64::consts::PI.powi(2) * nu)).round() as u64;
-    let center = [0.5 * l - 0.25, 0.5 * l + 0.15];
-    let disc = Particle::disc(center.into(), radius, density);
-    let mass = disc.mass;
-    let model = ContactModel {
-        normal_stiffness: 1e-6 * mass,
-        shear_stiffness: 1e-6 * mass,
-        friction: 0.0,
-        restitution: 1.0,
-        no_tension: true,
-    };
-    // Body force balancing the applied force at the initial coverage.
-    let mut probe = lattice(n, n, Boundaries::periodic(), tau, [0.0; 2], m);
-    probe.cover_with_discs(
-        &[lbdem::engine::lattice::FluidDisc {
-            center,
-            radius,
-            velocity: [0.0; 2],
-            spin: 0.0,
-        }],
+    let (mut world, g) = free_disc_world(
+        n,
+        radius,
+        density,
+        tau,
+        force,
+        m.collision(),
+        m.solid,
         m.weighting,
-    );
-    let fluid_weight = |eps: &[f64]| -> f64 { eps.iter().map(|&e| 1.0 - m.weight(e, tau)).sum() };
-    let g = -force / fluid_weight(&probe.solid_fraction_map());
-    let fluid = lattice(n, n, Boundaries::periodic(), tau, [g, 0.0], m);
-    let mut dem = DemWorld::new(vec![disc], model, 1.0).unwrap();
-    dem.local_damping = 0.0;
-    let mut world =
-        CoupledWorld::new(fluid, dem, LatticeMap::identity(), 1.0, m.weighting, 1).unwrap();
-    world.applied[0] = ([force, 0.0].into(), 0.0);
-    let total = |w: &CoupledWorld| -> f64 {
-        w.fluid.momentum()[0] + w.dem.particles[0].mass * w.dem.particles[0].velocity[0]
-    };
+    )
+    .unwrap();
+    let fluid_weight =
+        |eps: &[f64]| -> f64 { fluid_weight(eps, tau, m.solid, m.weighting, m.collision()) };
+    let total = total_momentum;
     let p0 = total(&world);
     let (mut impulse, mut momentum_error) = (0.0, 0.0f64);
     let window_start = steps - steps / 5;

@@ -16,7 +16,7 @@ use lbdem_kernels::Real;
 use serde::de::DeserializeOwned;
 use serde::{Deserialize, Serialize};
 
-use crate::engine::exec::Exec;
+use crate::engine::exec::{Exec, ExecTarget};
 use crate::engine::lattice::FluidLattice;
 use crate::error::{positive, LbdemError, Result};
 use crate::input::limits::{self, Budget};
@@ -24,7 +24,7 @@ use crate::observe::flow::max_mach;
 use crate::observe::health::fluid_health;
 use crate::observe::steady::Steadiness;
 use crate::output::{csv, write_atomic};
-use crate::run::{run_in_memory, Case, CheckpointInterval, Kind, OutputStage, Persist, RunOptions};
+use crate::run::{run_in_memory, Case, Kind, OutputStage, Persist, RunOptions};
 use crate::scene::{Precision, RunSection, SceneHeader, UnitLabels};
 use crate::units::{
     check_density_drop, check_mach, check_tau, collision_of, CollisionName, FluidSection,
@@ -77,6 +77,8 @@ pub struct ChannelScene {
     pub run: RunSection,
 }
 
+crate::scene::scene_file!(ChannelScene);
+
 impl ChannelScene {
     /// Parse a channel scene from TOML text (`path` for messages; ranges are checked by [`ChannelSetup::new`]).
     pub fn from_toml(text: &str, path: &str) -> Result<Self> {
@@ -115,6 +117,12 @@ pub struct ChannelSetup {
     pub warnings: Warnings,
     /// Fluid collision (`[fluid] collision`, default [`COLLISION`]).
     pub collision: Collision<f64>,
+}
+
+impl crate::run::Derived for ChannelSetup {
+    fn warnings(&self) -> &[String] {
+        &self.warnings.0
+    }
 }
 
 fn nodes_for(field: &str, length: f64, h: f64) -> Result<usize> {
@@ -163,7 +171,7 @@ impl ChannelSetup {
                     ));
                 }
                 let dp = c.pressure_drop.expect("validated");
-                let drho = 3.0 * units.pressure_to_lattice(dp);
+                let drho = units.pressure_to_density_change(dp);
                 let drop = drho;
                 check_density_drop("channel.pressure_drop", drop, &mut warnings)?;
                 let length = (nx - 1) as f64 * h;
@@ -606,18 +614,6 @@ impl Kind for Channel {
         case.setup.describe(case.scene.scene.units.labels())
     }
 
-    fn warnings(case: &Case<Self>) -> Vec<String> {
-        case.setup.warnings.0.clone()
-    }
-
-    fn units(scene: &ChannelScene) -> UnitLabels {
-        scene.scene.units.labels()
-    }
-
-    fn checkpoint_interval(scene: &ChannelScene) -> CheckpointInterval {
-        scene.run.checkpoint_interval
-    }
-
     fn start(case: &Case<Self>, exec: &Exec) -> Result<ChannelState> {
         Ok(match case.scene.scene.precision {
             Precision::F32 => ChannelState::F32(ChannelRun::new(case, exec)?),
@@ -625,9 +621,8 @@ impl Kind for Channel {
         })
     }
 
-    fn resume(_case: &Case<Self>, state: &mut ChannelState, exec: &Exec) -> Result<()> {
-        each!(state, r => exec.apply(&mut r.lattice));
-        Ok(())
+    fn lattices(state: &mut ChannelState) -> Vec<&mut dyn ExecTarget> {
+        each!(state, r => vec![&mut r.lattice as &mut dyn ExecTarget])
     }
 
     fn steps_done(state: &ChannelState) -> u64 {

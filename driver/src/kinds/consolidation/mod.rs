@@ -11,14 +11,14 @@ use serde::{Deserialize, Serialize};
 use crate::engine::coupled::{CoupledWorld, LatticeMap};
 use crate::engine::dem::packing::{boxed_sample, hexagonal_packing};
 use crate::engine::dem::DemWorld;
-use crate::engine::exec::Exec;
+use crate::engine::exec::{Exec, ExecTarget};
 use crate::engine::lattice::FluidLattice;
 use crate::error::{positive, LbdemError, Result};
 use crate::input::limits::{self, Budget};
 use crate::observe::health::{dem_health, finite, fluid_health};
 use crate::output::{csv, write_atomic};
-use crate::run::{run_in_memory, Case, CheckpointInterval, Kind, OutputStage, Persist, RunOptions};
-use crate::scene::{CheckpointSection, SceneHeader, UnitLabels, UnitsSetup};
+use crate::run::{run_in_memory, Case, Kind, OutputStage, Persist, RunOptions};
+use crate::scene::{CheckpointSection, SceneHeader, UnitsSetup};
 use crate::units::FluidSection;
 
 /// `[consolidation]`
@@ -63,6 +63,8 @@ pub struct ConsolidationScene {
     #[serde(default)]
     pub run: CheckpointSection,
 }
+
+crate::scene::scene_file!(ConsolidationScene);
 
 /// Outcome of a consolidation run.
 #[derive(Clone, Debug, Serialize)]
@@ -411,25 +413,12 @@ impl Kind for Consolidation {
             }
     }
 
-    fn warnings(case: &Case<Self>) -> Vec<String> {
-        case.setup.warnings.clone()
-    }
-
-    fn units(scene: &ConsolidationScene) -> UnitLabels {
-        scene.scene.units.labels()
-    }
-
-    fn checkpoint_interval(scene: &ConsolidationScene) -> CheckpointInterval {
-        scene.run.checkpoint_interval
-    }
-
     fn start(case: &Case<Self>, exec: &Exec) -> Result<ConsolidationState> {
         start(case, exec)
     }
 
-    fn resume(_case: &Case<Self>, state: &mut ConsolidationState, exec: &Exec) -> Result<()> {
-        exec.apply(&mut state.world.fluid);
-        Ok(())
+    fn lattices(state: &mut ConsolidationState) -> Vec<&mut dyn ExecTarget> {
+        vec![&mut state.world.fluid]
     }
 
     fn steps_done(state: &ConsolidationState) -> u64 {

@@ -33,14 +33,14 @@ use serde_json::json;
 
 use crate::engine::coupled::{CoupledWorld, LatticeMap};
 use crate::engine::dem::DemWorld;
-use crate::engine::exec::Exec;
+use crate::engine::exec::{Exec, ExecTarget};
 use crate::engine::lattice::FluidLattice;
 use crate::error::{LbdemError, Result};
 use crate::input::limits::{self, Budget};
 use crate::observe::health::{dem_health, fluid_health};
 use crate::output::{csv, write_atomic};
 use crate::run::{Case, CheckpointInterval, Kind, OutputStage, Persist};
-use crate::scene::{CheckpointSection, UnitLabels, UnitSystem};
+use crate::scene::{CheckpointSection, UnitSystem};
 use crate::units::TAU_REFUSE_HIGH;
 
 /// `[scene]` of the demo (only `kind` and an optional name).
@@ -76,6 +76,8 @@ pub struct DemoSection {
     pub record_interval: u64,
 }
 
+impl crate::run::Derived for DemoSection {}
+
 /// A whole demo scene file.
 #[derive(Clone, Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
@@ -87,6 +89,16 @@ pub struct DemoScene {
     /// `[run]`.
     #[serde(default)]
     pub run: CheckpointSection,
+}
+
+impl crate::run::SceneFile for DemoScene {
+    fn unit_system(&self) -> UnitSystem {
+        // Lattice units (h = Δt = ρ₀ = 1) are a consistent cgs-like system.
+        UnitSystem::Cgs
+    }
+    fn checkpoint_interval(&self) -> CheckpointInterval {
+        self.run.checkpoint_interval
+    }
 }
 
 impl DemoScene {
@@ -268,15 +280,6 @@ impl Kind for CoupledDemo {
         )
     }
 
-    fn units(_scene: &DemoScene) -> UnitLabels {
-        // Lattice units (h = Δt = ρ₀ = 1) are a consistent cgs-like system.
-        UnitSystem::Cgs.labels()
-    }
-
-    fn checkpoint_interval(scene: &DemoScene) -> CheckpointInterval {
-        scene.run.checkpoint_interval
-    }
-
     fn start(case: &Case<Self>, exec: &Exec) -> Result<DemoState> {
         let mut world = case.scene.build_world()?;
         exec.apply(&mut world.fluid);
@@ -286,7 +289,11 @@ impl Kind for CoupledDemo {
         })
     }
 
-    fn resume(_case: &Case<Self>, state: &mut DemoState, exec: &Exec) -> Result<()> {
+    fn lattices(state: &mut DemoState) -> Vec<&mut dyn ExecTarget> {
+        vec![&mut state.world.fluid]
+    }
+
+    fn check_resumed(_case: &Case<Self>, state: &DemoState) -> Result<()> {
         if state.rows.iter().any(|r| r.len() != COLUMNS.len()) {
             return Err(LbdemError::Checkpoint {
                 path: String::new(),
@@ -294,7 +301,6 @@ impl Kind for CoupledDemo {
                 hint: "the file was written by another lbdem version; start the run again".into(),
             });
         }
-        exec.apply(&mut state.world.fluid);
         Ok(())
     }
 

@@ -41,9 +41,9 @@ use crate::observe::flow::max_mach;
 use crate::observe::health::fluid_health;
 use crate::observe::steady::Steadiness;
 use crate::output::{csv, write_atomic};
-use crate::run::cases::{CaseRun, Cases};
-use crate::run::{Case, CheckpointInterval, Kind, OutputStage, Persist};
-use crate::scene::{whole_spacings, Precision, RunSection, SceneHeader, UnitLabels};
+use crate::run::cases::{CaseRun, Sweep};
+use crate::run::{Case, Kind, OutputStage};
+use crate::scene::{whole_spacings, RunSection, SceneHeader};
 use crate::units::{
     check_mach, check_tau, collision_of, CollisionName, FluidSection, LatticeUnits, Warnings,
 };
@@ -112,7 +112,7 @@ impl ArrayCase {
     ) -> Self {
         let mut case = Self::stokes(cell, solid_fraction, tau_max);
         let nu = u_max * 2.0 * case.radius() / re;
-        case.tau = (0.5 + 3.0 * nu).clamp(0.51, tau_max);
+        case.tau = crate::units::tau_of_lattice_viscosity(nu).clamp(0.51, tau_max);
         case.force = case.force_for_reynolds(re);
         case
     }
@@ -129,7 +129,7 @@ impl ArrayCase {
 
     /// Lattice viscosity (τ − ½)/3.
     pub fn viscosity(&self) -> f64 {
-        (self.tau - 0.5) / 3.0
+        crate::units::lattice_viscosity(self.tau)
     }
 
     /// Force density giving superficial velocity ≈ `u` in the Stokes regime (S&A drag, interpolated).
@@ -383,6 +383,8 @@ pub struct CylinderArrayScene {
     pub run: RunSection,
 }
 
+crate::scene::scene_file!(CylinderArrayScene);
+
 /// Everything derived from a cylinder-array scene.
 #[derive(Clone, Debug, Serialize)]
 pub struct ArraySetup {
@@ -392,6 +394,12 @@ pub struct ArraySetup {
     pub cases: Vec<ArrayCase>,
     /// Warnings.
     pub warnings: Warnings,
+}
+
+impl crate::run::Derived for ArraySetup {
+    fn warnings(&self) -> &[String] {
+        &self.warnings.0
+    }
 }
 
 impl ArraySetup {
@@ -480,32 +488,7 @@ impl ArraySetup {
 }
 
 /// What the run checkpoints: the cases in the scene's precision.
-#[derive(Serialize, Deserialize)]
-pub enum ArrayState {
-    /// precision = "f32".
-    F32(Cases<ArrayRun<f32>>),
-    /// precision = "f64".
-    F64(Cases<ArrayRun<f64>>),
-}
-
-impl Persist for ArrayState {
-    const PRECISION: u8 = 0;
-    fn precision(&self) -> u8 {
-        match self {
-            ArrayState::F32(_) => 4,
-            ArrayState::F64(_) => 8,
-        }
-    }
-}
-
-macro_rules! each {
-    ($state:expr, $r:ident => $body:expr) => {
-        match $state {
-            ArrayState::F32($r) => $body,
-            ArrayState::F64($r) => $body,
-        }
-    };
-}
+pub type ArrayState = Sweep<ArrayRun<f32>, ArrayRun<f64>>;
 
 fn drag_csv(outcomes: &[ArrayOutcome]) -> String {
     csv(
@@ -668,49 +651,7 @@ impl Kind for CylinderArray {
         s
     }
 
-    fn warnings(case: &Case<Self>) -> Vec<String> {
-        case.setup.warnings.0.clone()
-    }
-
-    fn units(scene: &CylinderArrayScene) -> UnitLabels {
-        scene.scene.units.labels()
-    }
-
-    fn checkpoint_interval(scene: &CylinderArrayScene) -> CheckpointInterval {
-        scene.run.checkpoint_interval
-    }
-
-    fn start(case: &Case<Self>, exec: &Exec) -> Result<ArrayState> {
-        Ok(match case.scene.scene.precision {
-            Precision::F32 => ArrayState::F32(Cases::new(exec)),
-            Precision::F64 => ArrayState::F64(Cases::new(exec)),
-        })
-    }
-
-    fn resume(_case: &Case<Self>, state: &mut ArrayState, exec: &Exec) -> Result<()> {
-        each!(state, r => r.resume(exec));
-        Ok(())
-    }
-
-    fn steps_done(state: &ArrayState) -> u64 {
-        each!(state, r => r.steps())
-    }
-
-    fn total_steps(case: &Case<Self>, _state: &ArrayState) -> Option<u64> {
-        Some(case.setup.cases.iter().map(|c| c.max_steps).sum())
-    }
-
-    fn finished(case: &Case<Self>, state: &ArrayState) -> bool {
-        each!(state, r => r.finished(case.setup.cases.len()))
-    }
-
-    fn advance(case: &Case<Self>, state: &mut ArrayState, _dir: Option<&Path>) -> Result<()> {
-        each!(state, r => r.advance(&case.setup.cases))
-    }
-
-    fn health(_case: &Case<Self>, state: &ArrayState) -> Result<()> {
-        each!(state, r => r.health())
-    }
+    crate::run::cases::sweep_kind_methods!();
 
     fn write_outputs(
         _case: &Case<Self>,
@@ -719,12 +660,12 @@ impl Kind for CylinderArray {
         _stage: OutputStage,
     ) -> Result<()> {
         // Periodic checkpoints flush the tables too, so that a killed run keeps its records so far.
-        let table = each!(state, r => drag_csv(&r.done));
+        let table = drag_csv(state.done());
         write_atomic(&dir.join("drag.csv"), table.as_bytes())
     }
 
     fn results(_case: &Case<Self>, state: &ArrayState) -> Result<serde_json::Value> {
-        let done = each!(state, r => &r.done);
+        let done = state.done();
         Ok(json!({
             "cases": done,
             "all_steady": done.iter().all(|r| r.steady),

@@ -56,13 +56,13 @@ use crate::observe::health::dem_health;
 use crate::output::pvd::write_snapshot;
 use crate::output::vtk::{bonds_vtp, particles_vtp, BreakClock, Stamp, Units};
 use crate::output::{csv, write_atomic};
-use crate::run::{Case, CheckpointInterval, Kind, OutputStage, Persist};
+use crate::run::{Case, Kind, OutputStage, Persist};
 use crate::scene::solid::grain_count;
 use crate::scene::solid::{
     bond_spec, critical_time_step, packing_spec, validate_packing_and_solid, PackingSection,
     SolidSection,
 };
-use crate::scene::{CheckpointSection, Precision, SceneHeader, UnitLabels};
+use crate::scene::{CheckpointSection, Precision, SceneHeader};
 
 fn default_settle() -> u64 {
     1000
@@ -142,6 +142,8 @@ pub struct DryScene {
     pub run: CheckpointSection,
 }
 
+crate::scene::scene_file!(DryScene);
+
 impl DryScene {
     /// Range checks naming the field.
     pub fn validate(&self) -> Result<()> {
@@ -213,6 +215,8 @@ pub struct DrySetup {
     /// The DEM step.
     pub timestep: f64,
 }
+
+impl crate::run::Derived for DrySetup {}
 
 /// The loading stage in progress.
 #[derive(Clone, Debug, Serialize, Deserialize)]
@@ -556,14 +560,6 @@ impl Kind for Dry {
         describe(&case.scene, case.setup.critical_time_step)
     }
 
-    fn units(scene: &DryScene) -> UnitLabels {
-        scene.scene.units.labels()
-    }
-
-    fn checkpoint_interval(scene: &DryScene) -> CheckpointInterval {
-        scene.run.checkpoint_interval
-    }
-
     fn start(case: &Case<Self>, _exec: &Exec) -> Result<DryState> {
         Ok(match case.scene.scene.precision {
             Precision::F32 => DryState::F32(start_run(&case.scene)?),
@@ -571,7 +567,7 @@ impl Kind for Dry {
         })
     }
 
-    fn resume(case: &Case<Self>, state: &mut DryState, _exec: &Exec) -> Result<()> {
+    fn check_resumed(case: &Case<Self>, state: &DryState) -> Result<()> {
         let same = matches!(
             (state, case.scene.scene.precision),
             (DryState::F32(_), Precision::F32) | (DryState::F64(_), Precision::F64)

@@ -8,17 +8,14 @@ use lbdem_kernels::fluid::collide::{SolidOperator, Weighting};
 use lbdem_kernels::fluid::step::FluidParams;
 use serde::{Deserialize, Serialize};
 
-use crate::engine::exec::Exec;
+use crate::engine::exec::{Exec, ExecTarget};
 use crate::engine::lattice::FluidLattice;
 use crate::error::{positive, LbdemError, Result};
 use crate::input::limits::{self, Budget};
 use crate::observe::health::fluid_health;
-use crate::run::{run_in_memory, Case, CheckpointInterval, Kind, OutputStage, Persist, RunOptions};
-use crate::scene::{CheckpointSection, SceneHeader, UnitLabels, UnitsSetup};
-use crate::units::FluidSection;
-
-/// Lattice sound speed squared c_s² = 1/3.
-const CS2: f64 = 1.0 / 3.0;
+use crate::run::{run_in_memory, Case, Kind, OutputStage, Persist, RunOptions};
+use crate::scene::{CheckpointSection, SceneHeader, UnitsSetup};
+use crate::units::{FluidSection, CS2};
 
 /// Half-thickness of the compressibility piston (nodes).
 const PISTON_HALF_THICKNESS: f64 = 1.5;
@@ -53,6 +50,8 @@ pub struct CompressibilityScene {
     #[serde(default)]
     pub run: CheckpointSection,
 }
+
+crate::scene::scene_file!(CompressibilityScene);
 
 /// Outcome of a fluid-compressibility run.
 #[derive(Clone, Debug, Serialize)]
@@ -440,25 +439,12 @@ impl Kind for FluidCompressibility {
             }
     }
 
-    fn warnings(case: &Case<Self>) -> Vec<String> {
-        case.setup.warnings.clone()
-    }
-
-    fn units(scene: &CompressibilityScene) -> UnitLabels {
-        scene.scene.units.labels()
-    }
-
-    fn checkpoint_interval(scene: &CompressibilityScene) -> CheckpointInterval {
-        scene.run.checkpoint_interval
-    }
-
     fn start(case: &Case<Self>, exec: &Exec) -> Result<CompressibilityState> {
         CompressibilityState::new(case, exec)
     }
 
-    fn resume(_case: &Case<Self>, state: &mut CompressibilityState, exec: &Exec) -> Result<()> {
-        exec.apply(&mut state.fluid);
-        Ok(())
+    fn lattices(state: &mut CompressibilityState) -> Vec<&mut dyn ExecTarget> {
+        vec![&mut state.fluid]
     }
 
     fn steps_done(state: &CompressibilityState) -> u64 {

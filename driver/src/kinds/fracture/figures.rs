@@ -176,6 +176,7 @@ pub fn snapshot_png(
     });
     chart.draw_series(cracks)?;
     root.present()?;
+    crate::output::record_output(path)?;
     Ok(())
 }
 
@@ -224,6 +225,7 @@ pub fn speed_png(path: &Path, w: &DemWorld<f64>, time: f64, velocity_unit: &str)
     });
     chart.draw_series(polygons)?;
     root.present()?;
+    crate::output::record_output(path)?;
     Ok(())
 }
 
@@ -290,6 +292,7 @@ pub fn time_distance_png(
     }
     chart.draw_series(cells)?;
     root.present()?;
+    crate::output::record_output(path)?;
     Ok(())
 }
 
@@ -356,6 +359,7 @@ pub fn rose_png(path: &Path, rows: &[BreakRow]) -> FigureResult {
         )
     }))?;
     root.present()?;
+    crate::output::record_output(path)?;
     Ok(())
 }
 
@@ -401,5 +405,6 @@ pub fn breaks_png(path: &Path, series: &[(String, Vec<(f64, f64)>)]) -> FigureRe
         .position(SeriesLabelPosition::UpperLeft)
         .draw()?;
     root.present()?;
+    crate::output::record_output(path)?;
     Ok(())
 }

@@ -38,7 +38,7 @@ use serde_json::json;
 use crate::engine::coupled::{CoupledWorld, LatticeMap};
 use crate::engine::dem::packing::{generate_packing, Packing};
 use crate::engine::dem::world::{DemWorld, PlatenControl, SampleBox, CRITICAL_STEP_SAFETY};
-use crate::engine::exec::Exec;
+use crate::engine::exec::{Exec, ExecTarget};
 use crate::engine::lattice::FluidLattice;
 use crate::error::{positive, LbdemError, Result};
 use crate::input::limits::{self, Budget, GRAIN_BYTES};
@@ -51,13 +51,13 @@ use crate::output::vtk::{
     bonds_vtp, lattice_vti, node_kinds, particles_vtp, BreakClock, Field, Stamp, Units,
 };
 use crate::output::{csv, write_atomic, SCENE_COPY};
-use crate::run::{Case, CheckpointInterval, Kind, OutputStage, Persist};
+use crate::run::{Case, Kind, OutputStage, Persist};
 use crate::scene::solid::grain_count;
 use crate::scene::solid::{
     bond_spec, critical_time_step, packing_spec, validate_packing_and_solid, PackingSection,
     SolidSection,
 };
-use crate::scene::{check_free_grain_operator, CheckpointSection, SceneHeader, UnitLabels};
+use crate::scene::{check_free_grain_operator, CheckpointSection, SceneHeader};
 use crate::units::{
     check_density_drop, check_tau, collision_of, CollisionName, FluidSection, LatticeUnits,
     Warnings,
@@ -243,6 +243,8 @@ pub struct FractureScene {
     #[serde(default)]
     pub run: CheckpointSection,
 }
+
+crate::scene::scene_file!(FractureScene);
 
 /// Kind tag of fracture checkpoints.
 pub const FRACTURE_KIND: &str = "fracture";
@@ -929,7 +931,12 @@ impl<'a, S: std::ops::Deref<Target = FractureState>> FractureRun<'a, S> {
         // lattice units k* = ν* q* L*/(Δp*) with Δp* = Δρ/3 over L* = nx − 1, q* = flux per unit height.
         let q_per_height = q / ((ny) as f64);
         let length = (nx - 1) as f64;
-        let k_lattice = permeability(units.lattice_viscosity, q_per_height, length, drho / 3.0);
+        let k_lattice = permeability(
+            units.lattice_viscosity,
+            q_per_height,
+            length,
+            crate::units::cs2_times(drho),
+        );
         let k = k_lattice * units.spacing * units.spacing;
         let n_fluid = 1.0 - lattice.solid_fraction_map().iter().sum::<f64>() / (nx * ny) as f64;
         eprintln!(
@@ -949,7 +956,7 @@ impl<'a, S: std::ops::Deref<Target = FractureState>> FractureRun<'a, S> {
     /// Hydraulic diffusivity and storage of the intact sample by the transient method of ch. 5.6 (table 6.3's
     /// "storage"): grains fixed, the pore fluid raised by a small overpressure P₀ and drained through both ends;
     /// fluid-fraction-weighted column means of P/P₀ inside the sample, sampled between Fourier numbers 0.02 and
-    /// 0.5, are fitted by least squares (Gauss–Newton with faer, [`fit_diffusivity`]) to the slab
+    /// 0.5, are fitted by least squares (Gauss–Newton, [`fit_diffusivity`]) to the slab
     /// solution of eq. 5.12 with faces at the sample's ends. Storage S = k/(μ c) (here with the grains held, so it
     /// is the fluid's own compressibility times the pore fraction that stores: 1/(ρ₀c_s²) × n).
     fn measure_diffusivity(
@@ -974,7 +981,8 @@ impl<'a, S: std::ops::Deref<Target = FractureState>> FractureRun<'a, S> {
         let half = 0.5 * (xb - xa) as f64;
         let center = 0.5 * (xa + xb) as f64;
         // Guess: the rigid-skeleton LB diffusivity k c_s²/(ν n) (lattice units, c_s² = 1/3).
-        let guess = k_lattice / (3.0 * units.lattice_viscosity * n_fluid.max(1e-3));
+        let guess =
+            k_lattice / (crate::units::over_cs2(units.lattice_viscosity) * n_fluid.max(1e-3));
         let t_end = (0.5 * half * half / guess).ceil().max(20.0) as u64;
         let t_start = (0.02 * half * half / guess).ceil().max(1.0) as u64;
         let snapshots = 12u64;
@@ -1033,8 +1041,9 @@ impl<'a, S: std::ops::Deref<Target = FractureState>> FractureRun<'a, S> {
         }))
     }
 
-    /// The tables and figures so far.
-    fn write_tables(&self, out: &Path) -> Result<()> {
+    /// The tables so far, and the figures when `figures` (and the scene's `output.figures`).
+    fn write_tables(&self, out: &Path, figures: bool) -> Result<()> {
+        let figures = figures && self.scene.output.figures;
         let history = csv(
             &HISTORY_COLUMNS,
             self.state.history.iter().map(|h| h.to_row()),
@@ -1061,7 +1070,7 @@ impl<'a, S: std::ops::Deref<Target = FractureState>> FractureRun<'a, S> {
                 analysis::matrix_csv(&times, &self.state.center_x, &self.state.center_speed)
                     .as_bytes(),
             )?;
-            if self.scene.output.figures {
+            if figures {
                 let labels = self.scene.scene.units.labels();
                 for (name, data, what) in [
                     (
@@ -1084,7 +1093,7 @@ impl<'a, S: std::ops::Deref<Target = FractureState>> FractureRun<'a, S> {
                 }
             }
         }
-        if self.scene.output.figures {
+        if figures {
             let path = out.join("rose.png");
             if let Err(e) = figures::rose_png(&path, &rows) {
                 eprintln!("lbdem: WARNING: figure {} not drawn: {e}", path.display());
@@ -1439,6 +1448,12 @@ pub struct FractureSetup {
     pub warnings: Vec<String>,
 }
 
+impl crate::run::Derived for FractureSetup {
+    fn warnings(&self) -> &[String] {
+        &self.warnings
+    }
+}
+
 /// The initial state of a fracture run from a packing made by [`pack`] for a scene with the same `[packing]`
 /// and `[solid]` sections (e.g. the controls and variants of one sample, packed once).
 pub fn start_packed(
@@ -1529,32 +1544,26 @@ impl Kind for FractureTest {
             .unwrap_or_else(|e| format!("  (not described: {e})\n"))
     }
 
-    fn warnings(case: &Case<Self>) -> Vec<String> {
-        case.setup.warnings.clone()
-    }
-
-    fn units(scene: &FractureScene) -> UnitLabels {
-        scene.scene.units.labels()
-    }
-
-    fn checkpoint_interval(scene: &FractureScene) -> CheckpointInterval {
-        scene.run.checkpoint_interval
-    }
-
     fn start(case: &Case<Self>, exec: &Exec) -> Result<FractureState> {
         start_packed(case, exec, pack(&case.scene)?)
     }
 
-    fn resume(_case: &Case<Self>, state: &mut FractureState, exec: &Exec) -> Result<()> {
+    fn lattices(state: &mut FractureState) -> Vec<&mut dyn ExecTarget> {
+        state
+            .coupled
+            .as_mut()
+            .map(|w| &mut w.fluid as &mut dyn ExecTarget)
+            .into_iter()
+            .collect()
+    }
+
+    fn check_resumed(_case: &Case<Self>, state: &FractureState) -> Result<()> {
         if state.coupled.is_some() == state.dry.is_some() {
             return Err(LbdemError::Checkpoint {
                 path: String::new(),
                 problem: "holds a fracture state without exactly one world".into(),
                 hint: "the file was written by another lbdem version; start the run again".into(),
             });
-        }
-        if let Some(w) = &mut state.coupled {
-            exec.apply(&mut w.fluid);
         }
         Ok(())
     }
@@ -1594,14 +1603,16 @@ impl Kind for FractureTest {
         case: &Case<Self>,
         state: &FractureState,
         dir: &Path,
-        _stage: OutputStage,
+        stage: OutputStage,
     ) -> Result<()> {
-        // Periodic checkpoints flush the tables too, so that a killed run keeps its records so far.
+        // Periodic checkpoints flush the tables too, so that a killed run keeps its records so far; the
+        // figures (PNG, slow to draw) only at the end, on an interrupt and on divergence, never in the
+        // stepping loop.
         FractureRun {
             scene: &case.scene,
             state,
         }
-        .write_tables(dir)
+        .write_tables(dir, stage != OutputStage::Checkpoint)
     }
 
     fn results(case: &Case<Self>, state: &FractureState) -> Result<serde_json::Value> {

@@ -41,12 +41,12 @@ use crate::observe::flow::max_mach;
 use crate::observe::health::fluid_health;
 use crate::observe::steady::Steadiness;
 use crate::output::{csv, write_atomic};
-use crate::run::cases::{CaseRun, Cases};
-use crate::run::{Case, CheckpointInterval, Kind, OutputStage, Persist};
-use crate::scene::{whole_spacings, Precision, RunSection, SceneHeader, UnitLabels};
+use crate::run::cases::{CaseRun, Sweep};
+use crate::run::{Case, Kind, OutputStage};
+use crate::scene::{whole_spacings, Precision, RunSection, SceneHeader};
 use crate::units::{
-    check_density_drop, check_tau, collision_of, CollisionName, FluidSection, LatticeUnits,
-    Warnings,
+    check_density_drop, check_tau, collision_of, cs2_times, CollisionName, FluidSection,
+    LatticeUnits, Warnings,
 };
 
 /// The fluid collision of porous-flow scenes without `[fluid] collision`: TRT, which with ΩΛ (the default
@@ -131,7 +131,7 @@ impl PorousCase {
 
     /// Lattice viscosity (τ − ½)/3.
     pub fn viscosity(&self) -> f64 {
-        (self.tau - 0.5) / 3.0
+        crate::units::lattice_viscosity(self.tau)
     }
 
     /// Porosity of the array region, 1 − πD²/(4 l²).
@@ -340,7 +340,7 @@ impl<T: Real> PorousRun<T> {
             for y in 0..ny {
                 for x in x_a + k * l..x_a + (k + 1) * l {
                     let n = y * nx + x;
-                    pw += (1.0 - eps[n]) * rho[n].to_f64_exact() / 3.0;
+                    pw += cs2_times((1.0 - eps[n]) * rho[n].to_f64_exact());
                     w += 1.0 - eps[n];
                 }
             }
@@ -377,7 +377,7 @@ impl<T: Real> PorousRun<T> {
             size: (nx, ny),
             porosity: n,
             min_gap: case.min_gap(),
-            imposed_gradient: case.density_drop / 3.0 / (nx - 1) as f64,
+            imposed_gradient: cs2_times(case.density_drop) / (nx - 1) as f64,
             interior_gradient: interior,
             superficial_velocity: q,
             permeability: k,
@@ -523,6 +523,8 @@ pub struct PorousFlowScene {
     pub run: RunSection,
 }
 
+crate::scene::scene_file!(PorousFlowScene);
+
 /// Everything derived from a porous-flow scene.
 #[derive(Clone, Debug, Serialize)]
 pub struct PorousSetup {
@@ -532,6 +534,12 @@ pub struct PorousSetup {
     pub cases: Vec<PorousCase>,
     /// Warnings.
     pub warnings: Warnings,
+}
+
+impl crate::run::Derived for PorousSetup {
+    fn warnings(&self) -> &[String] {
+        &self.warnings.0
+    }
 }
 
 impl PorousSetup {
@@ -606,7 +614,7 @@ impl PorousSetup {
         let mut cases = Vec::new();
         for &d in &p.diameters {
             for &dp in &p.pressure_drops {
-                let drho = 3.0 * units.pressure_to_lattice(dp);
+                let drho = units.pressure_to_density_change(dp);
                 check_density_drop("porous.pressure_drops", drho, &mut warnings)?;
                 let case = PorousCase {
                     columns: p.columns,
@@ -644,32 +652,7 @@ impl PorousSetup {
 }
 
 /// What the run checkpoints: the cases in the scene's precision.
-#[derive(Serialize, Deserialize)]
-pub enum PorousState {
-    /// precision = "f32".
-    F32(Cases<PorousRun<f32>>),
-    /// precision = "f64".
-    F64(Cases<PorousRun<f64>>),
-}
-
-impl Persist for PorousState {
-    const PRECISION: u8 = 0;
-    fn precision(&self) -> u8 {
-        match self {
-            PorousState::F32(_) => 4,
-            PorousState::F64(_) => 8,
-        }
-    }
-}
-
-macro_rules! each {
-    ($state:expr, $r:ident => $body:expr) => {
-        match $state {
-            PorousState::F32($r) => $body,
-            PorousState::F64($r) => $body,
-        }
-    };
-}
+pub type PorousState = Sweep<PorousRun<f32>, PorousRun<f64>>;
 
 fn runs_csv(outcomes: &[PorousOutcome], spacing: f64) -> String {
     csv(
@@ -826,49 +809,7 @@ impl Kind for PorousFlow {
         s
     }
 
-    fn warnings(case: &Case<Self>) -> Vec<String> {
-        case.setup.warnings.0.clone()
-    }
-
-    fn units(scene: &PorousFlowScene) -> UnitLabels {
-        scene.scene.units.labels()
-    }
-
-    fn checkpoint_interval(scene: &PorousFlowScene) -> CheckpointInterval {
-        scene.run.checkpoint_interval
-    }
-
-    fn start(case: &Case<Self>, exec: &Exec) -> Result<PorousState> {
-        Ok(match case.scene.scene.precision {
-            Precision::F32 => PorousState::F32(Cases::new(exec)),
-            Precision::F64 => PorousState::F64(Cases::new(exec)),
-        })
-    }
-
-    fn resume(_case: &Case<Self>, state: &mut PorousState, exec: &Exec) -> Result<()> {
-        each!(state, r => r.resume(exec));
-        Ok(())
-    }
-
-    fn steps_done(state: &PorousState) -> u64 {
-        each!(state, r => r.steps())
-    }
-
-    fn total_steps(case: &Case<Self>, _state: &PorousState) -> Option<u64> {
-        Some(case.setup.cases.iter().map(|c| c.max_steps).sum())
-    }
-
-    fn finished(case: &Case<Self>, state: &PorousState) -> bool {
-        each!(state, r => r.finished(case.setup.cases.len()))
-    }
-
-    fn advance(case: &Case<Self>, state: &mut PorousState, _dir: Option<&Path>) -> Result<()> {
-        each!(state, r => r.advance(&case.setup.cases))
-    }
-
-    fn health(_case: &Case<Self>, state: &PorousState) -> Result<()> {
-        each!(state, r => r.health())
-    }
+    crate::run::cases::sweep_kind_methods!();
 
     fn write_outputs(
         case: &Case<Self>,
@@ -877,12 +818,12 @@ impl Kind for PorousFlow {
         _stage: OutputStage,
     ) -> Result<()> {
         // Periodic checkpoints flush the tables too, so that a killed run keeps its records so far.
-        let table = each!(state, r => runs_csv(&r.done, case.setup.units.spacing));
+        let table = runs_csv(state.done(), case.setup.units.spacing);
         write_atomic(&dir.join("runs.csv"), table.as_bytes())
     }
 
     fn results(case: &Case<Self>, state: &PorousState) -> Result<serde_json::Value> {
-        let results = each!(state, r => &r.done);
+        let results = state.done();
         // Darcy fit per diameter (when it has ≥ 2 pressure drops); Kozeny fit over one run per diameter.
         let mut darcy = Vec::new();
         let mut per_diameter = Vec::new();

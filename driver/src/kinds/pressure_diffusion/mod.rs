@@ -13,7 +13,7 @@
 //! last snapshot). The effective n differs from the geometric 1 − ⟨ε⟩ because fluid on links between two fully
 //! covered nodes is trapped by Ω₃'s bounce-back (never drains) while partially covered nodes store fully: both
 //! porosities are reported. The diffusivity is fitted to cross-section averages over fluid-only nodes (ε = 0, as
-//! the dissertation did) of P/P₀ at several times, by Gauss–Newton on ln c with `faer`
+//! the dissertation did) of P/P₀ at several times, by Gauss–Newton on ln c
 //! ([`crate::observe::fit::fit_diffusivity`]), to the slab series
 //! ([`lbdem_reference::analytic::slab_pressure`]).
 use std::path::Path;
@@ -26,7 +26,7 @@ use lbdem_reference::analytic::{slab_mean_pressure, slab_pressure};
 use serde::{Deserialize, Serialize};
 
 use crate::engine::dem::packing::{generate_packing, PackingSpec};
-use crate::engine::exec::Exec;
+use crate::engine::exec::{Exec, ExecTarget};
 use crate::engine::lattice::FluidLattice;
 use crate::error::{positive, LbdemError, Result};
 use crate::input::limits::{self, Budget, GRAIN_BYTES};
@@ -35,17 +35,22 @@ use crate::observe::fit::fit_diffusivity;
 use crate::observe::health::fluid_health;
 use crate::observe::steady::Steadiness;
 use crate::output::{csv, write_atomic};
-use crate::run::{run_in_memory, Case, CheckpointInterval, Kind, OutputStage, Persist, RunOptions};
-use crate::scene::{CheckpointSection, SceneHeader, UnitLabels, UnitsSetup};
-use crate::units::FluidSection;
-
-/// Lattice sound speed squared c_s² = 1/3.
-const CS2: f64 = 1.0 / 3.0;
+use crate::run::{run_in_memory, Case, Kind, OutputStage, Persist, RunOptions};
+use crate::scene::{CheckpointSection, SceneHeader, UnitsSetup};
+use crate::units::{FluidSection, CS2};
 
 /// Relative change of the outlet flux per 200 steps below which the Darcy run counts as steady. The slowest
 /// mode of the approach decays over (2L)²/(π² c) steps (~2 000 in the fast scene), so the flux left to gain is
 /// about this × (decay time / 200) ≈ 1e-4 relative: far below the other errors of the check.
 const DARCY_TOLERANCE: f64 = 1e-5;
+
+/// The Darcy run's step limit (it stops there steady or not; the permeability is then reported as not
+/// converged).
+const DARCY_MAX_STEPS: u64 = 400_000;
+
+/// The largest Fourier number of a snapshot: at c t / L² = 10 the slab's mean overpressure is below 1e-10 P₀
+/// (eq. 5.12, slowest mode e^{−π² Fo / 4}), so later snapshots measure nothing.
+const MAX_FOURIER: f64 = 10.0;
 
 const HINT: &str =
     "lower pressure_diffusion.overpressure or darcy_pressure_drop, or raise fluid.tau";
@@ -88,6 +93,8 @@ pub struct PressureDiffusionScene {
     #[serde(default)]
     pub run: CheckpointSection,
 }
+
+crate::scene::scene_file!(PressureDiffusionScene);
 
 /// One recorded cross-section-averaged profile.
 #[derive(Clone, Debug, Serialize, Deserialize)]
@@ -238,7 +245,11 @@ fn start(case: &Case<PressureDiffusion>, exec: &Exec) -> Result<DiffusionState> 
         nx,
         ny,
         darcy: Some(darcy),
-        flow: SteadyFlow::new(Steadiness::new(DARCY_TOLERANCE, false), 200, 400_000),
+        flow: SteadyFlow::new(
+            Steadiness::new(DARCY_TOLERANCE, false),
+            200,
+            DARCY_MAX_STEPS,
+        ),
         drho_d,
         permeability: f64::NAN,
         geometric_porosity: f64::NAN,
@@ -301,6 +312,22 @@ impl DiffusionState {
                 .collect();
             times.sort_unstable();
             times.dedup();
+            // The drainage's step count follows from the diffusivity just measured: refused above the limit
+            // of every run, naming the field that sets it.
+            if let Some(&last) = times.last() {
+                let fo = half_length * half_length / c_geo;
+                limits::steps("pressure_diffusion.fourier_times", last).map_err(|e| {
+                    LbdemError::field(
+                        "pressure_diffusion.fourier_times",
+                        format!("{:?}", case.scene.pressure_diffusion.fourier_times),
+                        &format!(
+                            "with the diffusivity measured by the Darcy run ({c_geo:.3e} nodes^2/step: one                              Fourier unit L^2/c is {fo:.3e} steps) the drainage needs {last} steps, above the                              limit of {} steps per run ({e})",
+                            limits::MAX_STEPS
+                        ),
+                        "use smaller Fourier times, a shorter slab (pressure_diffusion.width) or a coarser                          fluid.spacing",
+                    )
+                })?;
+            }
             // Columns with fluid-only nodes, and those nodes.
             self.columns = (1..nx - 1)
                 .map(|x| {
@@ -482,12 +509,16 @@ impl Kind for PressureDiffusion {
             ));
         }
         if d.fourier_times.is_empty()
-            || d.fourier_times.iter().any(|t| !(t.is_finite() && *t > 0.0))
+            || d.fourier_times
+                .iter()
+                .any(|t| !(t.is_finite() && *t > 0.0 && *t <= MAX_FOURIER))
         {
             return Err(LbdemError::field(
                 "pressure_diffusion.fourier_times",
                 format!("{:?}", d.fourier_times),
-                "must be a non-empty list of positive Fourier numbers c t / L^2",
+                &format!(
+                    "must be a non-empty list of positive Fourier numbers c t / L^2, each at most                      {MAX_FOURIER} (the slab is drained to 1e-10 of the overpressure by then)"
+                ),
                 "e.g. [0.05, 0.1, 0.2, 0.4, 0.8, 1.5]",
             ));
         }
@@ -552,6 +583,13 @@ impl Kind for PressureDiffusion {
             true,
         )?;
         b.add_items("grains", "pressure_diffusion.width", grains, GRAIN_BYTES)?;
+        let fo_max = d.fourier_times.iter().copied().fold(0.0, f64::max);
+        b.note(format!(
+            "steps: the Darcy run at most {DARCY_MAX_STEPS}, then the drainage to Fourier number {fo_max} (its \
+             step count follows from the measured diffusivity; refused above {} steps, naming \
+             pressure_diffusion.fourier_times)",
+            limits::MAX_STEPS
+        ));
         Ok(b)
     }
 
@@ -581,28 +619,14 @@ impl Kind for PressureDiffusion {
             }
     }
 
-    fn warnings(case: &Case<Self>) -> Vec<String> {
-        case.setup.warnings.clone()
-    }
-
-    fn units(scene: &PressureDiffusionScene) -> UnitLabels {
-        scene.scene.units.labels()
-    }
-
-    fn checkpoint_interval(scene: &PressureDiffusionScene) -> CheckpointInterval {
-        scene.run.checkpoint_interval
-    }
-
     fn start(case: &Case<Self>, exec: &Exec) -> Result<DiffusionState> {
         start(case, exec)
     }
 
-    fn resume(_case: &Case<Self>, state: &mut DiffusionState, exec: &Exec) -> Result<()> {
-        if let Some(d) = &mut state.darcy {
-            exec.apply(d);
-        }
-        exec.apply(&mut state.fluid);
-        Ok(())
+    fn lattices(state: &mut DiffusionState) -> Vec<&mut dyn ExecTarget> {
+        let mut all: Vec<&mut dyn ExecTarget> = vec![&mut state.fluid];
+        all.extend(state.darcy.as_mut().map(|d| d as &mut dyn ExecTarget));
+        all
     }
 
     fn steps_done(state: &DiffusionState) -> u64 {
@@ -632,11 +656,10 @@ impl Kind for PressureDiffusion {
         case: &Case<Self>,
         state: &DiffusionState,
         dir: &Path,
-        stage: OutputStage,
+        _stage: OutputStage,
     ) -> Result<()> {
-        if stage != OutputStage::Finished {
-            return Ok(());
-        }
+        // Every stage, periodic checkpoints included, so that a killed run keeps the profiles so far (fitted
+        // to the snapshots so far; the finished run rewrites them with the final fit).
         let o = state.outcome(case);
         write_atomic(&dir.join("profiles.csv"), profiles_csv(&o).as_bytes())
     }

@@ -21,23 +21,23 @@ use lbdem_kernels::coupling::{BodyShape, CoupledBody};
 use lbdem_kernels::dem::assembly::ContactModel;
 use lbdem_kernels::dem::shape::Particle;
 use lbdem_kernels::fluid::boundary::Boundaries;
-use lbdem_kernels::fluid::collide::{lambda_weighting, weighting, Collision, SolidOperator};
+use lbdem_kernels::fluid::collide::{
+    lambda_weighting, weighting, Collision, SolidOperator, Weighting,
+};
 use lbdem_kernels::fluid::step::FluidParams;
 use lbdem_reference::analytic::sangani_acrivos_drag;
 use serde::{Deserialize, Serialize};
 
 use crate::engine::coupled::{CoupledWorld, LatticeMap};
 use crate::engine::dem::DemWorld;
-use crate::engine::exec::Exec;
+use crate::engine::exec::{Exec, ExecTarget};
 use crate::engine::lattice::FluidLattice;
 use crate::error::{positive, LbdemError, Result};
 use crate::input::limits::{self, Budget};
 use crate::observe::health::{dem_health, fluid_health};
 use crate::output::{csv, write_atomic};
-use crate::run::{run_in_memory, Case, CheckpointInterval, Kind, OutputStage, Persist, RunOptions};
-use crate::scene::{
-    check_free_grain_operator, CheckpointSection, SceneHeader, UnitLabels, UnitsSetup,
-};
+use crate::run::{run_in_memory, Case, Kind, OutputStage, Persist, RunOptions};
+use crate::scene::{check_free_grain_operator, CheckpointSection, SceneHeader, UnitsSetup};
 use crate::units::{collision_of, CollisionName, FluidSection, Warnings};
 
 /// The fluid collision of terminal-velocity scenes without `[fluid] collision`.
@@ -82,6 +82,8 @@ pub struct TerminalVelocityScene {
     #[serde(default)]
     pub run: CheckpointSection,
 }
+
+crate::scene::scene_file!(TerminalVelocityScene);
 
 /// Outcome of a terminal-velocity run (lattice units unless said).
 #[derive(Clone, Debug, Serialize)]
@@ -143,39 +145,47 @@ pub struct TerminalState {
 impl Persist for TerminalState {}
 
 /// Σ_n (1 − B_n): the weight of the fluid's body force over the nodes (Guo forcing scaled by 1 − B), B the
-/// weighting of `op` ([`SolidOperator::weighting`]; ΩΛ's in its τ-free form).
-fn fluid_weight(eps: &[f64], tau: f64, op: SolidOperator, collision: Collision<f64>) -> f64 {
-    let w = op.weighting();
+/// weighting `wf` of the solid operator `op` (ΩΛ's in its τ-free form).
+pub fn fluid_weight(
+    eps: &[f64],
+    tau: f64,
+    op: SolidOperator,
+    wf: Weighting,
+    collision: Collision<f64>,
+) -> f64 {
     match (op, collision.rates(tau)) {
         (SolidOperator::LambdaConsistent, Ok(rates)) => eps
             .iter()
-            .map(|&e| 1.0 - lambda_weighting(w, e, rates))
+            .map(|&e| 1.0 - lambda_weighting(wf, e, rates))
             .sum(),
-        _ => eps.iter().map(|&e| 1.0 - weighting(w, e, tau)).sum(),
+        _ => eps.iter().map(|&e| 1.0 - weighting(wf, e, tau)).sum(),
     }
 }
 
 /// Fluid + grain momentum along x.
-fn total_momentum(w: &CoupledWorld) -> f64 {
+pub fn total_momentum(w: &CoupledWorld) -> f64 {
     w.fluid.momentum()[0] + w.dem.particles[0].mass * w.dem.particles[0].velocity[0]
 }
 
-fn start(case: &Case<TerminalVelocity>, exec: &Exec) -> Result<TerminalState> {
-    let t = &case.scene.terminal_velocity;
-    let u = &case.setup.units;
-    let n = u.length_to_lattice(t.cell).round() as usize;
+/// This kind's world in lattice units: a free disc of radius `radius` and areal density `density` (relative to
+/// ρ₀) slightly off the centre of a periodic `n` × `n` lattice at relaxation time `tau`, pushed along x by
+/// `force`, the fluid driven by the body force g that balances `force` at the initial coverage (so that the
+/// total momentum changes only through the exchange). Public so that tests run the same set-up with other
+/// collision and solid operators. Returns the world and g.
+#[allow(clippy::too_many_arguments)]
+pub fn free_disc_world(
+    n: usize,
+    radius: f64,
+    density: f64,
+    tau: f64,
+    force: f64,
+    collision: Collision<f64>,
+    op: SolidOperator,
+    wf: Weighting,
+) -> Result<(CoupledWorld, f64)> {
     let l = n as f64;
-    let radius = l * (t.solid_fraction / std::f64::consts::PI).sqrt();
-    let tau = u.tau;
-    let force = u.force_to_lattice(t.applied_force);
-    let steps = u.time_to_steps(t.duration).round().max(1.0) as u64;
-    let op = t.solid_operator;
-    let wf = op.weighting();
-    let collision = collision_of(case.scene.fluid.checked_collision(COLLISION, tau)?)?;
-    // The disc in lattice coordinates (the DEM runs in lattice units through LatticeMap::identity, the physical
-    // inputs having been converted above by LatticeUnits).
+    // The disc in lattice coordinates (the DEM runs in lattice units through LatticeMap::identity).
     let center = [0.5 * l - 0.25, 0.5 * l + 0.15];
-    let density = t.grain_density / case.scene.fluid.density; // areal density relative to ρ₀ (lattice mass / node)
     let disc = Particle::disc(lbdem_kernels::math::Vector::from(center), radius, density);
     let mass = disc.mass;
     // No contacts exist; the stiffness only enters the DEM's critical-step check, kept far above Δt = 1.
@@ -203,7 +213,7 @@ fn start(case: &Case<TerminalVelocity>, exec: &Exec) -> Result<TerminalState> {
         },
     )?;
     probe.cover_with_bodies(&[body], wf);
-    let g = -force / fluid_weight(&probe.solid_fraction_map(), tau, op, collision);
+    let g = -force / fluid_weight(&probe.solid_fraction_map(), tau, op, wf, collision);
     let mut fluid = FluidLattice::<f64>::new(
         n,
         n,
@@ -213,13 +223,38 @@ fn start(case: &Case<TerminalVelocity>, exec: &Exec) -> Result<TerminalState> {
             force: [g, 0.0],
         },
     )?;
-    exec.apply(&mut fluid);
     fluid.set_collision(collision)?;
     fluid.set_solid_operator(op);
     let mut dem = DemWorld::new(vec![disc], model, 1.0)?;
     dem.local_damping = 0.0; // local damping is an external momentum sink (it removes momentum from the system: Cundall 1987)
     let mut world = CoupledWorld::new(fluid, dem, LatticeMap::identity(), 1.0, wf, 1)?;
     world.applied[0] = (lbdem_kernels::math::vector(force, 0.0), 0.0);
+    Ok((world, g))
+}
+
+fn start(case: &Case<TerminalVelocity>, exec: &Exec) -> Result<TerminalState> {
+    let t = &case.scene.terminal_velocity;
+    let u = &case.setup.units;
+    let n = u.length_to_lattice(t.cell).round() as usize;
+    let l = n as f64;
+    let radius = l * (t.solid_fraction / std::f64::consts::PI).sqrt();
+    let tau = u.tau;
+    let force = u.force_to_lattice(t.applied_force);
+    let steps = u.time_to_steps(t.duration).round().max(1.0) as u64;
+    let op = t.solid_operator;
+    let collision = collision_of(case.scene.fluid.checked_collision(COLLISION, tau)?)?;
+    let density = t.grain_density / case.scene.fluid.density; // areal density relative to ρ₀ (lattice mass / node)
+    let (mut world, g) = free_disc_world(
+        n,
+        radius,
+        density,
+        tau,
+        force,
+        collision,
+        op,
+        op.weighting(),
+    )?;
+    exec.apply(&mut world.fluid);
     let p0 = total_momentum(&world);
     Ok(TerminalState {
         world,
@@ -256,7 +291,7 @@ impl TerminalState {
             let (records, window) = (&mut self.records, &mut self.window);
             world.step();
             let eps = world.fluid.solid_fraction_map();
-            *impulse += force + g * fluid_weight(&eps, tau, op, collision);
+            *impulse += force + g * fluid_weight(&eps, tau, op, op.weighting(), collision);
             let p = total_momentum(world);
             *momentum_error = momentum_error.max((p - p0 - *impulse).abs());
             let in_window = s > window_start;
@@ -479,25 +514,12 @@ impl Kind for TerminalVelocity {
             }
     }
 
-    fn warnings(case: &Case<Self>) -> Vec<String> {
-        case.setup.warnings.clone()
-    }
-
-    fn units(scene: &TerminalVelocityScene) -> UnitLabels {
-        scene.scene.units.labels()
-    }
-
-    fn checkpoint_interval(scene: &TerminalVelocityScene) -> CheckpointInterval {
-        scene.run.checkpoint_interval
-    }
-
     fn start(case: &Case<Self>, exec: &Exec) -> Result<TerminalState> {
         start(case, exec)
     }
 
-    fn resume(_case: &Case<Self>, state: &mut TerminalState, exec: &Exec) -> Result<()> {
-        exec.apply(&mut state.world.fluid);
-        Ok(())
+    fn lattices(state: &mut TerminalState) -> Vec<&mut dyn ExecTarget> {
+        vec![&mut state.world.fluid]
     }
 
     fn steps_done(state: &TerminalState) -> u64 {

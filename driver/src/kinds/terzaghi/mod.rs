@@ -19,7 +19,7 @@ use crate::engine::dem::loading::{settle_loaded, uniaxial_strain_step, StepLoadR
 use crate::engine::dem::packing::{generate_packing, hexagonal_packing, PackingSpec};
 use crate::engine::dem::world::BondSpec;
 use crate::engine::dem::DemWorld;
-use crate::engine::exec::Exec;
+use crate::engine::exec::{Exec, ExecTarget};
 use crate::engine::lattice::FluidLattice;
 use crate::error::{positive, LbdemError, Result};
 use crate::input::limits::{self, Budget};
@@ -29,12 +29,10 @@ use crate::observe::flow::fluid_row_means;
 use crate::observe::health::{dem_health, finite, fluid_health};
 use crate::observe::steady::Steadiness;
 use crate::output::{csv, write_atomic};
-use crate::run::{run_in_memory, Case, CheckpointInterval, Kind, OutputStage, Persist, RunOptions};
-use crate::scene::{CheckpointSection, SceneHeader, UnitLabels, UnitsSetup};
-use crate::units::FluidSection;
+use crate::run::{run_in_memory, Case, Kind, OutputStage, Persist, RunOptions};
+use crate::scene::{CheckpointSection, SceneHeader, UnitsSetup};
+use crate::units::{FluidSection, CS2};
 
-/// Lattice sound speed squared c_s² = 1/3.
-const CS2: f64 = 1.0 / 3.0;
 /// Lattice density difference of the steady Darcy run (small: Mach ≪ 0.1 and a linear response).
 const DARCY_DRHO: f64 = 1e-3;
 /// Relative flux change per 200 steps below which the Darcy run is steady (with Ω₁ₗ a constant drift is
@@ -119,6 +117,8 @@ pub struct TerzaghiScene {
     #[serde(default)]
     pub run: CheckpointSection,
 }
+
+crate::scene::scene_file!(TerzaghiScene);
 
 /// The independent measurements and the prediction they give (physical units).
 #[derive(Clone, Debug, Serialize, Deserialize)]
@@ -883,28 +883,14 @@ impl Kind for Terzaghi {
             )
     }
 
-    fn warnings(case: &Case<Self>) -> Vec<String> {
-        case.setup.warnings.clone()
-    }
-
-    fn units(scene: &TerzaghiScene) -> UnitLabels {
-        scene.scene.units.labels()
-    }
-
-    fn checkpoint_interval(scene: &TerzaghiScene) -> CheckpointInterval {
-        scene.run.checkpoint_interval
-    }
-
     fn start(case: &Case<Self>, exec: &Exec) -> Result<TerzaghiState> {
         start(case, exec)
     }
 
-    fn resume(_case: &Case<Self>, state: &mut TerzaghiState, exec: &Exec) -> Result<()> {
-        exec.apply(&mut state.world.fluid);
-        if let Some(d) = &mut state.darcy {
-            exec.apply(d);
-        }
-        Ok(())
+    fn lattices(state: &mut TerzaghiState) -> Vec<&mut dyn ExecTarget> {
+        let mut all: Vec<&mut dyn ExecTarget> = vec![&mut state.world.fluid];
+        all.extend(state.darcy.as_mut().map(|d| d as &mut dyn ExecTarget));
+        all
     }
 
     fn steps_done(state: &TerzaghiState) -> u64 {
