@@ -11,7 +11,7 @@ use lbdem::run::checkpoint::{scene_hash, Checkpoint, Persist, FORMAT_VERSION, MA
 use lbdem::run::{Case, Kind};
 use sha2::{Digest, Sha256};
 
-const SCENE: &str = "[scene]\nkind = \"coupled_demo\"\n[demo]\nnx = 32\nny = 32\ntau = 0.8\ndiscs = 2\nradius = 4.0\nspeed = 0.01\nsteps = 40\nrecord_interval = 10\n";
+const SCENE: &str = "[scene]\nkind = \"coupled_demo\"\n[demo]\nnx = 32\nny = 32\ntau = 0.8\ndiscs = 2\nradius = 4.0\nspeed = 0.01\nsteps = 80\nrecord_interval = 10\n";
 
 /// `payload` in a sealed envelope of kind `coupled_demo` and float width `precision`.
 fn sealed(payload: &[u8], precision: u8) -> Vec<u8> {

@@ -49,6 +49,33 @@ macro_rules! scene_file {
 }
 pub(crate) use scene_file;
 
+/// A fraction in (0, 1] (e.g. `fluid_radius`, the fraction of a grain's radius the fluid sees, dissertation
+/// ch. 5.3.4), NaN refused.
+pub fn in_unit_interval(field: &str, value: f64, hint: &str) -> Result<()> {
+    if value > 0.0 && value <= 1.0 {
+        return Ok(());
+    }
+    Err(LbdemError::field(field, value, "must lie in (0, 1]", hint))
+}
+
+/// A grain radius (`field`) the fluid resolves: at least 2 lattice spacings once scaled by `fluid_radius`.
+pub fn check_resolved(
+    field: &str,
+    radius: f64,
+    fluid_radius: f64,
+    units: &crate::units::LatticeUnits,
+) -> Result<()> {
+    if units.length_to_lattice(radius) * fluid_radius >= 2.0 {
+        return Ok(());
+    }
+    Err(LbdemError::field(
+        field,
+        radius,
+        "is seen by the fluid as fewer than 2 lattice spacings",
+        "refine fluid.spacing",
+    ))
+}
+
 /// Floating-point precision of the kernels.
 #[derive(Clone, Copy, Debug, Deserialize, Serialize, PartialEq, Eq, Default)]
 #[serde(rename_all = "lowercase")]

@@ -288,14 +288,11 @@ impl Kind for Consolidation {
                 "e.g. 0.05",
             ));
         }
-        if !(c.fluid_radius > 0.0 && c.fluid_radius <= 1.0) {
-            return Err(LbdemError::field(
-                "consolidation.fluid_radius",
-                c.fluid_radius,
-                "must lie in (0, 1]",
-                "the dissertation uses 0.6-0.95",
-            ));
-        }
+        crate::scene::in_unit_interval(
+            "consolidation.fluid_radius",
+            c.fluid_radius,
+            "the dissertation uses 0.6-0.95",
+        )?;
         if !(c.friction >= 0.0 && c.friction.is_finite()) {
             return Err(LbdemError::field(
                 "consolidation.friction",
@@ -315,14 +312,7 @@ impl Kind for Consolidation {
                 "lower the load, or shorten fluid.timestep",
             ));
         }
-        if u.length_to_lattice(c.radius) * c.fluid_radius < 2.0 {
-            return Err(LbdemError::field(
-                "consolidation.radius",
-                c.radius,
-                "is seen by the fluid as fewer than 2 lattice spacings",
-                "refine fluid.spacing",
-            ));
-        }
+        crate::scene::check_resolved("consolidation.radius", c.radius, c.fluid_radius, &u)?;
         Ok(())
     }
 

@@ -331,14 +331,11 @@ impl FractureScene {
             ));
         }
         for (k, b) in self.heterogeneity.iter().enumerate() {
-            if !(b.fluid_radius > 0.0 && b.fluid_radius <= 1.0) {
-                return Err(LbdemError::field(
-                    &format!("heterogeneity[{k}].fluid_radius"),
-                    b.fluid_radius,
-                    "must lie in (0, 1]",
-                    "ch. 6.8.1 uses 0.6 and 0.95",
-                ));
-            }
+            crate::scene::in_unit_interval(
+                &format!("heterogeneity[{k}].fluid_radius"),
+                b.fluid_radius,
+                "ch. 6.8.1 uses 0.6 and 0.95",
+            )?;
             positive(
                 &format!("heterogeneity[{k}].width"),
                 b.width,
@@ -362,14 +359,7 @@ impl FractureScene {
             ));
         }
         if let Some(f) = &self.fluid {
-            if !(f.fluid_radius > 0.0 && f.fluid_radius <= 1.0) {
-                return Err(LbdemError::field(
-                    "fluid.fluid_radius",
-                    f.fluid_radius,
-                    "must lie in (0, 1]",
-                    "table 6.2: 0.6",
-                ));
-            }
+            crate::scene::in_unit_interval("fluid.fluid_radius", f.fluid_radius, "table 6.2: 0.6")?;
             positive("fluid.margin", f.margin, "e.g. 0.3 cm of free fluid")?;
             self.fluid_setup(f, &mut Warnings::default())?;
         } else if l.pressure_drop > 0.0 {

@@ -500,14 +500,11 @@ impl Kind for PressureDiffusion {
             d.darcy_pressure_drop,
             "pressure drop of the permeability run",
         )?;
-        if !(d.fluid_radius > 0.0 && d.fluid_radius <= 1.0) {
-            return Err(LbdemError::field(
-                "pressure_diffusion.fluid_radius",
-                d.fluid_radius,
-                "must lie in (0, 1]",
-                "the dissertation uses 0.6-0.95",
-            ));
-        }
+        crate::scene::in_unit_interval(
+            "pressure_diffusion.fluid_radius",
+            d.fluid_radius,
+            "the dissertation uses 0.6-0.95",
+        )?;
         if d.fourier_times.is_empty()
             || d.fourier_times
                 .iter()

@@ -728,14 +728,11 @@ impl Kind for Terzaghi {
                 "make width and height at least 8 radius_max",
             ));
         }
-        if !(c.fluid_radius > 0.0 && c.fluid_radius <= 1.0) {
-            return Err(LbdemError::field(
-                "terzaghi.fluid_radius",
-                c.fluid_radius,
-                "must lie in (0, 1]",
-                "0.8 keeps the 2-D pore space connected",
-            ));
-        }
+        crate::scene::in_unit_interval(
+            "terzaghi.fluid_radius",
+            c.fluid_radius,
+            "0.8 keeps the 2-D pore space connected",
+        )?;
         if !(c.friction >= 0.0 && c.friction.is_finite()) {
             return Err(LbdemError::field(
                 "terzaghi.friction",
@@ -745,14 +742,11 @@ impl Kind for Terzaghi {
             ));
         }
         if let Some(a) = c.aspect_ratio {
-            if !(a > 0.0 && a <= 1.0) {
-                return Err(LbdemError::field(
-                    "terzaghi.aspect_ratio",
-                    a,
-                    "must lie in (0, 1]",
-                    "1 for discs, 0.5 for the fracture test's ellipses",
-                ));
-            }
+            crate::scene::in_unit_interval(
+                "terzaghi.aspect_ratio",
+                a,
+                "1 for discs, 0.5 for the fracture test's ellipses",
+            )?;
         }
         match (c.bond_stiffness, c.bond_strength) {
             (None, None) => {}
@@ -809,14 +803,7 @@ impl Kind for Terzaghi {
                 "keep the step a fraction of the packing stress",
             ));
         }
-        if u.length_to_lattice(c.radius_min) * c.fluid_radius < 2.0 {
-            return Err(LbdemError::field(
-                "terzaghi.radius_min",
-                c.radius_min,
-                "is seen by the fluid as fewer than 2 lattice spacings",
-                "refine fluid.spacing",
-            ));
-        }
+        crate::scene::check_resolved("terzaghi.radius_min", c.radius_min, c.fluid_radius, &u)?;
         Ok(())
     }
 
