@@ -788,4 +788,17 @@ fn contact_model_critical_step_is_the_pfc_estimate() {
         "{dt} vs {expected}"
     );
     assert_eq!(model.critical_time_step(&[], 4.0), f64::INFINITY);
+    // A soft shear spring makes translation the limit: √(m/(z k)) with k = max(k_n, k_s) = k_n, below the disc's
+    // rotation limit √(m/(2 z k_s)).
+    let soft_shear = ContactModel {
+        shear_stiffness: 1e3,
+        ..model
+    };
+    let dt = soft_shear.critical_time_step(&[small], 4.0);
+    let translation = (small.mass / (4.0 * 1e5)).sqrt();
+    assert!((small.mass / (2.0 * 4.0 * 1e3)).sqrt() > translation);
+    assert!(
+        (dt - translation).abs() < 1e-12 * translation,
+        "{dt} vs {translation}"
+    );
 }
