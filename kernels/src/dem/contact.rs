@@ -245,6 +245,12 @@ fn refine<T: Real>(a: &Placed<T>, b: &Placed<T>, d: Vector<T>, lo: T, hi: T, sta
 /// Contact between two placed convex shapes (ellipses, or discs as ellipses with a = b), i = `a`, j = `b`, by
 /// maximising the separating-axis gap over the normal angle (see the module documentation). Exact for any
 /// orientation; returns the signed overlap whether or not the shapes touch.
+///
+/// **Domain.** The search starts from 32 sampled directions, so it finds the global maximum when the gap's peak
+/// is wider than about a sample spacing: checked for aspect ratios b/a ≥ 0.05 (the property
+/// `ellipse_ellipse_finds_the_maximum_gap_of_elongated_pairs`, 20 000 random pairs passed). For needles below that
+/// a sharp peak can fall between samples and be missed (seen at b/a = 0.066 and 0.026: a gap of 1.807 reported
+/// for 1.831), which near contact would report a phantom overlap.
 pub fn ellipse_ellipse<T: Real>(a: &Placed<T>, b: &Placed<T>) -> Contact<T> {
     let d = b.centre - a.centre;
     let step = T::lit(core::f64::consts::TAU / ELLIPSE_SAMPLES as f64);
