@@ -128,6 +128,21 @@ fn elastic_head_on_collision() {
     eprintln!("elastic collision energy errors at t_c/50, /100, /200: {energy_errors:?}");
 }
 
+/// The ends of the restitution range: e ≥ 1 is elastic (ζ = 0); e ≤ 0 and NaN are critical damping (ζ = 1), never
+/// the NaN or infinity that −ln e/√(π² + ln² e) gives there.
+#[test]
+fn damping_ratio_at_the_ends_of_the_restitution_range() {
+    for e in [1.0, 1.5, f64::INFINITY] {
+        assert_eq!(damping_ratio_from_restitution(e), 0.0, "e = {e}");
+    }
+    for e in [0.0, -0.0, -0.5, f64::NEG_INFINITY, f64::NAN] {
+        assert_eq!(damping_ratio_from_restitution(e), 1.0, "e = {e}");
+    }
+    // Just inside: finite and between 0 and 1 (e → 0⁺ gives ζ → 1⁻).
+    let z = damping_ratio_from_restitution(1e-300);
+    assert!(z > 0.99 && z < 1.0, "{z}");
+}
+
 #[test]
 fn restitution_is_recovered_with_the_dashpot() {
     let m_eff = effective_mass(disc_mass(), disc_mass());
