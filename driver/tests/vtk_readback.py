@@ -2,15 +2,18 @@
 
 Usage: python3 vtk_readback.py RUN_DIR
 
-Run by driver/tests/vtk_readback.rs on the run directories of tiny scenes (see docs/outputs.md). For every
+Run by driver/tests/vtk_readback.rs on the run directories of tiny scenes of every kind that writes snapshots
+(fracture, dry, coupled_demo, terminal_velocity, consolidation, terzaghi; see docs/outputs.md). For every
 `.pvd` collection: the listed files exist and are read by VTK's XML readers (the readers ParaView uses), times
 are finite and increasing and equal to each file's TIME field data; every array has its documented name,
 component count and tuple count (points or cells) and finite values, and every physical array names its unit.
-Then values against the run's own tables: grains and bonds counted as in summary.json, recorded break times
-and modes equal to breaks.csv / broken_bonds.csv, the kinetic energy of the last grain snapshot against
-history.csv, the lattice's centre-line pressure and maximum fluid speed of the last snapshot against
-centerline_pressure.csv and history.csv, and the shape tensor drawn by VTK's tensor glyph filter (what
-ParaView's Tensor Glyph runs) against the true ellipse of a few grains. Exits non-zero with a message on the
+Then values against the run's own tables: grains, bonds and lattice nodes counted as in summary.json (no bond
+series without bonds, no lattice without a fluid), recorded break times and modes equal to breaks.csv /
+broken_bonds.csv, the kinetic energy of the last grain snapshot against history.csv (fracture) or series.csv
+(coupled_demo, with the grain momentum), the disc's final velocity against summary.json (terminal_velocity),
+the grains on the t = 0 lattice, the lattice's centre-line pressure and maximum fluid speed of the last snapshot
+against centerline_pressure.csv and history.csv (fracture), and the shape tensor drawn by VTK's tensor glyph
+filter (what ParaView's Tensor Glyph runs) against the true ellipse of a few grains. Exits non-zero with a message on the
 first failure; prints one line per checked file otherwise.
 """
 import csv
@@ -28,7 +31,8 @@ import numpy as np  # installed with vtk (through its matplotlib dependency)
 # Array name -> components, for each series (docs/outputs.md lists the same).
 PARTICLE_ARRAYS = {
     "speed": 1, "velocity": 3, "shape_tensor": 9, "id": 1, "angular_velocity": 1, "orientation": 1,
-    "major_axis": 3, "semi_axes": 3, "glyph_scale": 3, "mass": 1, "moment_of_inertia": 1, "contact_force": 3, "contact_count": 1,
+    "major_axis": 3, "semi_axes": 3, "glyph_scale": 3, "mass": 1, "moment_of_inertia": 1, "contact_force": 3,
+    "wall_force": 3, "contact_count": 1,
     "bonds": 1, "broken_bond_fraction": 1,
 }
 PARTICLE_FLUID_ARRAYS = {"fluid_force": 3, "fluid_torque": 1}
@@ -156,14 +160,34 @@ def check_glyphs(path, grains):
             check(abs(got - want) <= tol, f"{path}: tensor glyph of grain {i} spans {b[:4]}, the ellipse {x - hx, x + hx, y - hy, y + hy}")
 
 
+def expectations(kind, summary):
+    """(grains, bonds or None, lattice nodes (nx, ny) or None) of a run of `kind`, from its summary."""
+    res, scene = summary["results"], summary["scene"]
+    if kind == "fracture":
+        fluid = res.get("fluid")
+        return res["packing"]["particles"], res["total_bonds"], tuple(fluid["nodes"]) if fluid else None
+    if kind == "dry":
+        return res["particles"], res["bonds"], None
+    if kind == "coupled_demo":
+        d = scene["demo"]
+        return d["discs"], None, (d["nx"], d["ny"])
+    if kind == "terminal_velocity":
+        return 1, None, (res["cell"], res["cell"])
+    if kind == "consolidation":
+        c = scene["consolidation"]
+        return c["columns"] * c["rows"], None, tuple(res["nodes"])
+    if kind == "terzaghi":
+        return res["grains"], None, tuple(res["nodes"])
+    fail(f"no expectations for kind {kind}")
+
+
 def main(run):
     summary = json.load(open(os.path.join(run, "summary.json")))
-    kind = summary["kind"] if "kind" in summary else summary.get("scene", {}).get("kind")
+    kind = summary["kind"]
     res = summary["results"]
-    fracture = os.path.exists(os.path.join(run, "history.csv"))
-    particles = res["packing"]["particles"] if fracture else res["particles"]
-    bonds_total = res["total_bonds"] if fracture else res["bonds"]
-    coupled = fracture and res.get("fluid") is not None
+    fracture = kind == "fracture"
+    particles, bonds_total, nodes = expectations(kind, summary)
+    coupled = nodes is not None
 
     # Grains.
     snaps = collection(run, "particles")
@@ -191,9 +215,31 @@ def main(run):
         check(abs(ke - last["kinetic_energy"]) <= 1e-9 * abs(last["kinetic_energy"]) + 1e-300,
               f"{path}: kinetic energy {ke}, history.csv {last['kinetic_energy']}")
         print(f"vtk_readback: kinetic energy of the last snapshot {ke:.6e} = history.csv {last['kinetic_energy']:.6e}")
+    if kind == "coupled_demo":
+        header, rows = read_csv(os.path.join(run, "series.csv"))
+        last = dict(zip(header, map(float, rows[-1])))
+        check(last["step"] == t_last, f"last series row at step {last['step']}, last snapshot at {t_last}")
+        pd = grains.GetPointData()
+        m, v = arr(pd, "mass"), arr(pd, "velocity")
+        w, inertia = arr(pd, "angular_velocity"), arr(pd, "moment_of_inertia")
+        ke = 0.5 * np.sum(m * (v[:, 0] ** 2 + v[:, 1] ** 2) + inertia * w ** 2)
+        # f64 values summed in another order (a few ulps); series.csv prints 11 significant digits.
+        for got, col in [(np.sum(m * v[:, 0]), "grain_momentum_x"), (np.sum(m * v[:, 1]), "grain_momentum_y"),
+                         (ke, "grain_kinetic_energy")]:
+            check(abs(got - last[col]) <= 1e-9 * abs(last[col]), f"{path}: {col} {got}, series.csv {last[col]}")
+        print("vtk_readback: grain momentum and kinetic energy of the last snapshot = series.csv")
+    if kind == "terminal_velocity":
+        v = arr(grains.GetPointData(), "velocity")
+        want = res["disc_velocity_physical"]
+        # The writer's lattice-to-physical product against the summary's: a few ulps.
+        check(abs(v[0, 0] - want) <= 1e-12 * abs(want), f"{path}: disc velocity {v[0, 0]}, summary.json {want}")
+        print(f"vtk_readback: disc velocity {v[0, 0]:.6e} = summary.json")
 
     # Bonds.
-    snaps = collection(run, "bonds")
+    if bonds_total is None:
+        check(not os.path.exists(os.path.join(run, "bonds.pvd")), f"{run}: a bond series without bonds")
+        bonds_total = 0
+    snaps = collection(run, "bonds") if bonds_total else []
     for t, path, obj, units in snaps:
         check(obj.GetNumberOfLines() == bonds_total, f"{path}: {obj.GetNumberOfLines()} bond lines, summary.json says {bonds_total}")
         check(obj.GetNumberOfPoints() == particles, f"{path}: {obj.GetNumberOfPoints()} points")
@@ -210,6 +256,9 @@ def main(run):
             check((ids.GetId(0), ids.GetId(1)) == tuple(pairs[k]), f"{path}: line {k} joins {ids.GetId(0)}, {ids.GetId(1)}; pair says {pairs[k]}")
             k += 1
         print(f"vtk_readback: {os.path.basename(path)}: {bonds_total} bonds ({int(np.sum(intact == 0))} broken), t = {t:g} s")
+    if not snaps:
+        finish_lattice(run, kind, res, nodes, coupled, fracture)
+        return
     t, path, obj, _ = snaps[-1]
     cd = obj.GetCellData()
     mode, when = arr(cd, "break_mode"), arr(cd, "break_time")
@@ -227,11 +276,16 @@ def main(run):
         # The CSV prints 10 significant digits.
         check(ma == mb and abs(ta - tb) <= 1e-9 * max(abs(tb), 1e-12), f"{path}: break ({ta}, {ma}) vs table ({tb}, {mb})")
     print(f"vtk_readback: {len(ours)} recorded breaks: times and modes equal the break table")
+    finish_lattice(run, kind, res, nodes, coupled, fracture)
 
-    # Lattice.
-    if coupled:
+
+def finish_lattice(run, kind, res, nodes, coupled, fracture):
+    """The lattice series (coupled runs), then the closing line."""
+    if not coupled:
+        check(not os.path.exists(os.path.join(run, "lattice.pvd")), f"{run}: a lattice series without a fluid")
+    else:
         snaps = collection(run, "lattice")
-        nx, ny = res["fluid"]["nodes"]
+        nx, ny = nodes
         for t, path, obj, units in snaps:
             dims = obj.GetDimensions()
             check(tuple(dims) == (nx, ny, 1), f"{path}: dimensions {dims}, summary.json nodes {nx} x {ny}")
@@ -241,7 +295,10 @@ def main(run):
             kinds = arr(obj.GetPointData(), "node_kind")
             check(set(np.unique(kinds)) <= {0, 1, 2, 3}, f"{path}: node kinds {np.unique(kinds)}")
             check(np.array_equal(kinds == 1, (eps > 0) & (kinds != 3) & (kinds != 2)), f"{path}: node_kind 1 is not the covered nodes")
+            # The grains are on the lattice in every snapshot, the first (t = 0, mapped before it) too.
+            check(np.any(eps > 0), f"{path}: no grain on the lattice")
             print(f"vtk_readback: {os.path.basename(path)}: {nx} x {ny} nodes, t = {t:g} s")
+    if coupled and fracture:
         t, path, obj, _ = snaps[-1]
         pd = obj.GetPointData()
         p = arr(pd, "pressure").astype(float).reshape(ny, nx)

@@ -1,5 +1,6 @@
-//! Every VTK output of two tiny runs (a coupled fracture scene and a dry one), read back twice: by the Rust-side
-//! parser (`lbdem::output::vtk::parse_vtk_xml`), and by the real VTK library from Python
+//! Every VTK output of a tiny run of every kind that writes snapshots (`fracture` with a fluid, `dry`,
+//! `coupled_demo`, `terminal_velocity`, `consolidation`, `terzaghi`), read back twice: by the Rust-side parser
+//! (`lbdem::output::vtk::parse_vtk_xml`), and by the real VTK library from Python
 //! (`driver/tests/vtk_readback.py`, the `vtk` package of PyPI), each checking array names, sizes, finiteness
 //! and values against `summary.json` and the CSV tables of the same run.
 //!
@@ -57,9 +58,9 @@ fn run(name: &str, scene: &str) -> PathBuf {
     out
 }
 
-/// The two tiny runs, made once for both tests of this file.
-fn runs() -> &'static [(&'static str, PathBuf); 2] {
-    static RUNS: OnceLock<[(&'static str, PathBuf); 2]> = OnceLock::new();
+/// The tiny runs, made once for both tests of this file.
+fn runs() -> &'static [(&'static str, PathBuf)] {
+    static RUNS: OnceLock<Vec<(&'static str, PathBuf)>> = OnceLock::new();
     RUNS.get_or_init(|| {
         // The quick fracture scene for 2 ms of model time, with a snapshot every 1 ms (3 snapshots).
         let fracture = edit(
@@ -85,7 +86,41 @@ fn runs() -> &'static [(&'static str, PathBuf); 2] {
                 ("max_strain = 0.05\n", ""),
             ],
         );
-        [("fracture", run("fracture", &fracture)), ("dry", run("dry", &dry))]
+        // The other kinds with grains: the tiny scenes of `every_kind.rs`, with their default snapshot interval
+        // (a tenth of the run).
+        let demo = "[scene]\nkind = \"coupled_demo\"\n[demo]\nnx = 32\nny = 32\ntau = 0.8\ndiscs = 3\n\
+                    radius = 4.0\nspeed = 0.01\nsteps = 200\nrecord_interval = 10\n";
+        let terminal = edit(
+            &bundled("terminal_velocity.toml"),
+            &[
+                ("cell = 0.44 ", "cell = 0.198 "),
+                ("duration = 0.605", "duration = 0.1452"),
+            ],
+        );
+        let consolidation = edit(
+            &bundled("consolidation.toml"),
+            &[
+                ("columns = 10", "columns = 4"),
+                ("rows = 8", "rows = 3"),
+                ("duration = 1.0 ", "duration = 0.4 "),
+            ],
+        );
+        let terzaghi = edit(
+            &bundled("terzaghi.toml"),
+            &[
+                ("height = 2.4 ", "height = 1.0 "),
+                ("duration = 10.0 ", "duration = 0.6 "),
+                ("record_interval = 0.25 ", "record_interval = 0.1 "),
+            ],
+        );
+        vec![
+            ("fracture", run("fracture", &fracture)),
+            ("dry", run("dry", &dry)),
+            ("coupled_demo", run("coupled_demo", demo)),
+            ("terminal_velocity", run("terminal_velocity", &terminal)),
+            ("consolidation", run("consolidation", &consolidation)),
+            ("terzaghi", run("terzaghi", &terzaghi)),
+        ]
     })
 }
 
@@ -177,6 +212,67 @@ fn finite_and_sized(
     }
 }
 
+/// What a run of a kind must have written, from its `summary.json`.
+struct Expect {
+    grains: usize,
+    /// Bonds (`None`: no bond series).
+    bonds: Option<usize>,
+    /// Lattice nodes (`None`: no lattice series, no fluid arrays on the grains).
+    nodes: Option<[usize; 2]>,
+    /// Fraction of each grain's size the fluid sees.
+    fluid_radius: f64,
+}
+
+fn expect(kind: &str, s: &serde_json::Value) -> Expect {
+    let (r, sc) = (&s["results"], &s["scene"]);
+    let n = |v: &serde_json::Value| v.as_u64().unwrap() as usize;
+    let nodes = |v: &serde_json::Value| Some([n(&v[0]), n(&v[1])]);
+    match kind {
+        "fracture" => Expect {
+            grains: n(&r["packing"]["particles"]),
+            bonds: Some(n(&r["total_bonds"])),
+            nodes: nodes(&r["fluid"]["nodes"]),
+            fluid_radius: sc["fluid"]["fluid_radius"].as_f64().unwrap(),
+        },
+        "dry" => Expect {
+            grains: n(&r["particles"]),
+            bonds: Some(n(&r["bonds"])),
+            nodes: None,
+            fluid_radius: 1.0,
+        },
+        "coupled_demo" => Expect {
+            grains: n(&sc["demo"]["discs"]),
+            bonds: None,
+            nodes: Some([n(&sc["demo"]["nx"]), n(&sc["demo"]["ny"])]),
+            fluid_radius: 1.0,
+        },
+        "terminal_velocity" => Expect {
+            grains: 1,
+            bonds: None,
+            nodes: Some([n(&r["cell"]); 2]),
+            fluid_radius: 1.0,
+        },
+        // A hexagonal pack of `columns` × `rows` grains.
+        "consolidation" => Expect {
+            grains: n(&sc["consolidation"]["columns"]) * n(&sc["consolidation"]["rows"]),
+            bonds: None,
+            nodes: nodes(&r["nodes"]),
+            fluid_radius: sc["consolidation"]["fluid_radius"].as_f64().unwrap(),
+        },
+        "terzaghi" => Expect {
+            grains: n(&r["grains"]),
+            bonds: None,
+            nodes: nodes(&r["nodes"]),
+            fluid_radius: sc["terzaghi"]["fluid_radius"].as_f64().unwrap(),
+        },
+        other => panic!("no expectations for kind {other}"),
+    }
+}
+
+fn last_row(table: &(Vec<String>, Vec<Vec<String>>), name: &str) -> f64 {
+    column(table, name).last().unwrap().parse().unwrap()
+}
+
 #[test]
 fn every_output_parses_and_agrees_with_the_tables() {
     for (kind, dir) in runs() {
@@ -184,21 +280,11 @@ fn every_output_parses_and_agrees_with_the_tables() {
             serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap())
                 .unwrap();
         let r = &s["results"];
-        let coupled = *kind == "fracture";
-        let (particles, bonds) = if coupled {
-            (
-                r["packing"]["particles"].as_u64().unwrap(),
-                r["total_bonds"].as_u64().unwrap(),
-            )
-        } else {
-            (
-                r["particles"].as_u64().unwrap(),
-                r["bonds"].as_u64().unwrap(),
-            )
-        };
-        let (particles, bonds) = (particles as usize, bonds as usize);
+        let e = expect(kind, &s);
+        let particles = e.grains;
+        let coupled = e.nodes.is_some();
         let grains = series(dir, "particles");
-        if !coupled {
+        if *kind == "dry" {
             assert_eq!(grains.len() as u64, r["vtk_snapshots"].as_u64().unwrap());
         }
         let mut names = vec![
@@ -214,6 +300,7 @@ fn every_output_parses_and_agrees_with_the_tables() {
             "mass",
             "moment_of_inertia",
             "contact_force",
+            "wall_force",
             "contact_count",
             "bonds",
             "broken_bond_fraction",
@@ -228,141 +315,248 @@ fn every_output_parses_and_agrees_with_the_tables() {
             assert_eq!(got, names, "{file}");
             finite_and_sized(&file, &v.point_data, particles, v);
         }
-        // The fluid pushes the grains in the coupled run: fluid forces are not all zero after the drop.
+        // The fluid pushes the grains in a coupled run: fluid forces are not all zero at the end; before the
+        // first coupled step no fluid has acted yet.
         if coupled {
-            let ff = &grains
-                .last()
-                .unwrap()
-                .1
-                .point("fluid_force")
-                .unwrap()
-                .values;
-            assert!(ff.iter().any(|&f| f != 0.0), "fluid forces on the grains");
-        }
-        let links = series(dir, "bonds");
-        for (t, v) in &links {
-            let file = format!("{kind} bonds at {t}");
-            assert_eq!(v.cells.len(), bonds, "{file}");
-            finite_and_sized(&file, &v.cell_data, bonds, v);
-        }
-        // Recorded breaks of the last snapshot: the break table's times and modes.
-        let last = &links.last().unwrap().1;
-        let (mode, time) = (
-            &last.cell("break_mode").unwrap().values,
-            &last.cell("break_time").unwrap().values,
-        );
-        let names = ["", "tension", "shear", "compression"];
-        let mut ours: Vec<(f64, &str)> = mode
-            .iter()
-            .zip(time)
-            .filter(|(m, _)| (1.0..=3.0).contains(*m))
-            .map(|(&m, &t)| (t, names[m as usize]))
-            .collect();
-        let table = csv(&dir.join(if coupled {
-            "breaks.csv"
-        } else {
-            "broken_bonds.csv"
-        }));
-        let mut theirs: Vec<(f64, String)> = column(&table, "time")
-            .iter()
-            .zip(column(&table, "mode"))
-            .map(|(t, m)| (t.parse().unwrap(), m))
-            .collect();
-        ours.sort_by(|a, b| a.partial_cmp(b).unwrap());
-        theirs.sort_by(|a, b| a.partial_cmp(b).unwrap());
-        assert_eq!(
-            ours.len(),
-            theirs.len(),
-            "{kind}: recorded breaks vs the table"
-        );
-        assert_eq!(ours.len() as u64, r["broken_bonds"].as_u64().unwrap());
-        for ((ta, ma), (tb, mb)) in ours.iter().zip(&theirs) {
-            // The table prints 10 significant digits.
+            let ff = |k: usize| &grains[k].1.point("fluid_force").unwrap().values;
             assert!(
-                *ma == mb && (ta - tb).abs() <= 1e-9 * tb.abs().max(1e-12),
-                "{kind}: break ({ta}, {ma}) vs ({tb}, {mb})"
+                ff(grains.len() - 1).iter().any(|&f| f != 0.0),
+                "{kind}: fluid forces on the grains"
+            );
+            assert!(
+                ff(0).iter().all(|&f| f == 0.0),
+                "{kind}: fluid forces at t = 0"
             );
         }
-        if coupled {
+        match e.bonds {
+            None => assert!(
+                !dir.join("bonds.pvd").exists(),
+                "{kind}: bonds without bonds"
+            ),
+            Some(bonds) => {
+                let links = series(dir, "bonds");
+                assert_eq!(links.len(), grains.len(), "{kind}");
+                for (t, v) in &links {
+                    let file = format!("{kind} bonds at {t}");
+                    assert_eq!(v.cells.len(), bonds, "{file}");
+                    finite_and_sized(&file, &v.cell_data, bonds, v);
+                }
+                // Recorded breaks of the last snapshot: the break table's times and modes.
+                let last = &links.last().unwrap().1;
+                let (mode, time) = (
+                    &last.cell("break_mode").unwrap().values,
+                    &last.cell("break_time").unwrap().values,
+                );
+                let names = ["", "tension", "shear", "compression"];
+                let mut ours: Vec<(f64, &str)> = mode
+                    .iter()
+                    .zip(time)
+                    .filter(|(m, _)| (1.0..=3.0).contains(*m))
+                    .map(|(&m, &t)| (t, names[m as usize]))
+                    .collect();
+                let table = csv(&dir.join(if *kind == "fracture" {
+                    "breaks.csv"
+                } else {
+                    "broken_bonds.csv"
+                }));
+                let mut theirs: Vec<(f64, String)> = column(&table, "time")
+                    .iter()
+                    .zip(column(&table, "mode"))
+                    .map(|(t, m)| (t.parse().unwrap(), m))
+                    .collect();
+                ours.sort_by(|a, b| a.partial_cmp(b).unwrap());
+                theirs.sort_by(|a, b| a.partial_cmp(b).unwrap());
+                assert_eq!(
+                    ours.len(),
+                    theirs.len(),
+                    "{kind}: recorded breaks vs the table"
+                );
+                assert_eq!(ours.len() as u64, r["broken_bonds"].as_u64().unwrap());
+                for ((ta, ma), (tb, mb)) in ours.iter().zip(&theirs) {
+                    // The table prints 10 significant digits.
+                    assert!(
+                        *ma == mb && (ta - tb).abs() <= 1e-9 * tb.abs().max(1e-12),
+                        "{kind}: break ({ta}, {ma}) vs ({tb}, {mb})"
+                    );
+                }
+            }
+        }
+        let (t_last, g) = grains.last().unwrap();
+        let (m, v, w, inertia) = (
+            &g.point("mass").unwrap().values,
+            &g.point("velocity").unwrap().values,
+            &g.point("angular_velocity").unwrap().values,
+            &g.point("moment_of_inertia").unwrap().values,
+        );
+        let ke: f64 = (0..particles)
+            .map(|i| {
+                let spin = if inertia[i] < 0.0 {
+                    0.0
+                } else {
+                    inertia[i] * w[i] * w[i]
+                };
+                0.5 * (m[i] * (v[3 * i] * v[3 * i] + v[3 * i + 1] * v[3 * i + 1]) + spin)
+            })
+            .sum();
+        if *kind == "fracture" {
             // Kinetic energy of the last grain snapshot = the last history row (same time).
             let history = csv(&dir.join("history.csv"));
-            let t_last: f64 = column(&history, "time").last().unwrap().parse().unwrap();
-            let ke_table: f64 = column(&history, "kinetic_energy")
-                .last()
-                .unwrap()
-                .parse()
-                .unwrap();
-            let (t, g) = grains.last().unwrap();
+            let t_table = last_row(&history, "time");
+            let ke_table = last_row(&history, "kinetic_energy");
             assert!(
-                (t - t_last).abs() <= 1e-12,
-                "last snapshot at {t}, last record at {t_last}"
+                (t_last - t_table).abs() <= 1e-12,
+                "last snapshot at {t_last}, last record at {t_table}"
             );
-            let (m, v, w, inertia) = (
-                &g.point("mass").unwrap().values,
-                &g.point("velocity").unwrap().values,
-                &g.point("angular_velocity").unwrap().values,
-                &g.point("moment_of_inertia").unwrap().values,
-            );
-            let ke: f64 = (0..particles)
-                .map(|i| {
-                    let spin = if inertia[i] < 0.0 {
-                        0.0
-                    } else {
-                        inertia[i] * w[i] * w[i]
-                    };
-                    0.5 * (m[i] * (v[3 * i] * v[3 * i] + v[3 * i + 1] * v[3 * i + 1]) + spin)
-                })
-                .sum();
             // The same f64 values summed in the same order (bitwise the engine's sum) and printed in history.csv
             // with 11 significant digits.
             assert!(
                 (ke - ke_table).abs() <= 1e-9 * ke_table.abs(),
                 "kinetic energy {ke} vs history.csv {ke_table}"
             );
-            // The lattice: the summary's size, every array finite, ε in [0, 1].
-            let nodes = &r["fluid"]["nodes"];
-            let (nx, ny) = (
-                nodes[0].as_u64().unwrap() as usize,
-                nodes[1].as_u64().unwrap() as usize,
-            );
-            let lattice = series(dir, "lattice");
-            assert_eq!(lattice.len(), grains.len());
-            for (t, v) in &lattice {
-                let file = format!("lattice at {t}");
-                assert_eq!(
-                    v.attributes["WholeExtent"],
-                    format!("0 {} 0 {} 0 0", nx - 1, ny - 1)
-                );
-                finite_and_sized(&file, &v.point_data, nx * ny, v);
-                let eps = &v.point("solid_fraction").unwrap().values;
-                assert!(eps.iter().all(|e| (0.0..=1.0).contains(e)), "{file}");
-                // The grains are mapped onto the lattice in the first coupled step: the t = 0 snapshot (before
-                // it) has ε = 0 (docs/outputs.md), every later one shows them.
-                assert_eq!(
-                    eps.iter().any(|&e| e > 0.0),
-                    *t > 0.0,
-                    "{file}: grains cover the lattice"
+        }
+        if *kind == "coupled_demo" {
+            // The last row of series.csv (step 200) is the last snapshot: grain momentum and kinetic energy.
+            let table = csv(&dir.join("series.csv"));
+            assert_eq!(*t_last, last_row(&table, "step"));
+            let p = (0..particles).fold([0.0, 0.0], |p, i| {
+                [p[0] + m[i] * v[3 * i], p[1] + m[i] * v[3 * i + 1]]
+            });
+            // f64 values, the same sums; the table prints 11 significant digits.
+            for (got, col) in [
+                (p[0], "grain_momentum_x"),
+                (p[1], "grain_momentum_y"),
+                (ke, "grain_kinetic_energy"),
+            ] {
+                let want = last_row(&table, col);
+                assert!(
+                    (got - want).abs() <= 1e-9 * want.abs(),
+                    "{kind}: {col} {got} vs series.csv {want}"
                 );
             }
-            // Max fluid speed of the last snapshot (nodes with ε < 1) = history.csv's.
-            let v = &lattice.last().unwrap().1;
-            let (u, eps) = (
-                &v.point("velocity").unwrap().values,
-                &v.point("solid_fraction").unwrap().values,
+        }
+        if *kind == "terminal_velocity" {
+            // The disc's final velocity, converted from lattice units by the writer: the summary's.
+            let want = r["disc_velocity_physical"].as_f64().unwrap();
+            // One product (lattice speed h/Δt) in the writer, another in the summary: a few ulps.
+            assert!(
+                (v[0] - want).abs() <= 1e-12 * want.abs() && v[1].abs() <= 1e-3 * want.abs(),
+                "{kind}: disc velocity {:?} vs summary {want}",
+                &v[..2]
             );
+        }
+        let Some([nx, ny]) = e.nodes else {
+            assert!(
+                !dir.join("lattice.pvd").exists(),
+                "{kind}: a lattice without a fluid"
+            );
+            continue;
+        };
+        // The lattice: the summary's size, every array finite, ε in [0, 1], the grains on it in every
+        // snapshot (at t = 0 too: they are mapped before it is written).
+        let lattice = series(dir, "lattice");
+        assert_eq!(lattice.len(), grains.len(), "{kind}");
+        for (t, v) in &lattice {
+            let file = format!("{kind} lattice at {t}");
+            assert_eq!(
+                v.attributes["WholeExtent"],
+                format!("0 {} 0 {} 0 0", nx - 1, ny - 1),
+                "{file}"
+            );
+            finite_and_sized(&file, &v.point_data, nx * ny, v);
+            let eps = &v.point("solid_fraction").unwrap().values;
+            assert!(eps.iter().all(|e| (0.0..=1.0).contains(e)), "{file}");
+            assert!(
+                eps.iter().any(|&e| e > 0.0),
+                "{file}: grains cover the lattice"
+            );
+        }
+        // t = 0: the grains as the fluid sees them cover Σ π a b f² of area (eq. 4.4's exact cell areas, the
+        // grains apart and inside the lattice), from the particle file's semi-axes and the lattice spacing.
+        let (t0, l0) = &lattice[0];
+        assert_eq!(*t0, 0.0);
+        let spacing: f64 = l0.attributes["Spacing"]
+            .split(' ')
+            .next()
+            .unwrap()
+            .parse()
+            .unwrap();
+        let axes = &grains[0].1.point("semi_axes").unwrap().values;
+        let area: f64 = (0..particles)
+            .map(|i| std::f64::consts::PI * axes[3 * i] * axes[3 * i + 1])
+            .sum::<f64>()
+            * e.fluid_radius
+            * e.fluid_radius
+            / (spacing * spacing);
+        let covered: f64 = l0.point("solid_fraction").unwrap().values.iter().sum();
+        // ε stored as f32 (2^-24 relative each), summed over the covered nodes.
+        assert!(
+            (covered - area).abs() <= 1e-6 * area,
+            "{kind}: the t = 0 lattice covers {covered} nodes, the grains {area}"
+        );
+        let (u, eps, pressure) = {
+            let v = &lattice.last().unwrap().1;
+            (
+                v.point("velocity").unwrap().values.clone(),
+                v.point("solid_fraction").unwrap().values.clone(),
+                v.point("pressure").unwrap().values.clone(),
+            )
+        };
+        if *kind == "fracture" {
+            // Max fluid speed of the last snapshot (nodes with ε < 1) = history.csv's.
             let vmax = (0..nx * ny)
                 .filter(|&k| eps[k] < 1.0)
                 .map(|k| u[3 * k].hypot(u[3 * k + 1]))
                 .fold(0.0, f64::max);
-            let table: f64 = column(&history, "max_fluid_speed")
-                .last()
-                .unwrap()
-                .parse()
-                .unwrap();
+            let table = last_row(&csv(&dir.join("history.csv")), "max_fluid_speed");
             // float32 velocity components in the file: 2^-24 relative rounding, and ε rounded to f32 too.
             assert!(
                 (vmax - table).abs() <= 1e-6 * table,
                 "max fluid speed {vmax} vs history.csv {table}"
+            );
+        }
+        if *kind == "coupled_demo" {
+            // Lattice units: pressure (ρ − 1)/3, so the fluid mass is Σ (1 + 3p) and its momentum Σ (1 + 3p) u.
+            let table = csv(&dir.join("series.csv"));
+            let rho: Vec<f64> = pressure.iter().map(|p| 1.0 + 3.0 * p).collect();
+            let mass: f64 = rho.iter().sum();
+            let j = (0..nx * ny).fold([0.0, 0.0], |j, k| {
+                [j[0] + rho[k] * u[3 * k], j[1] + rho[k] * u[3 * k + 1]]
+            });
+            let speed_sum: f64 = (0..nx * ny)
+                .map(|k| u[3 * k].abs() + u[3 * k + 1].abs())
+                .sum();
+            // f32 pressure and velocity in the file: each term off by 2^-24 of itself.
+            let want = last_row(&table, "fluid_mass");
+            assert!(
+                (mass - want).abs() <= 1e-6 * want,
+                "{kind}: fluid mass {mass} vs {want}"
+            );
+            for (got, col) in [(j[0], "fluid_momentum_x"), (j[1], "fluid_momentum_y")] {
+                let want = last_row(&table, col);
+                assert!(
+                    (got - want).abs() <= 1e-6 * speed_sum,
+                    "{kind}: {col} {got} vs series.csv {want}"
+                );
+            }
+        }
+        if *kind == "consolidation" {
+            // The last series row is the last step: its bottom pore pressure over the load is the mean pressure
+            // of the fluid-only nodes (ε = 0) of the bottom grain diameter, over the load.
+            let table = csv(&dir.join("series.csv"));
+            assert!((t_last - last_row(&table, "time")).abs() <= 1e-12 * t_last);
+            let sc = &s["scene"]["consolidation"];
+            let (radius, load) = (sc["radius"].as_f64().unwrap(), sc["load"].as_f64().unwrap());
+            let rows = ((2.0 * radius / spacing).round() as usize).max(1);
+            let probe: Vec<f64> = (0..rows * nx)
+                .filter(|&k| eps[k] == 0.0)
+                .map(|k| pressure[k])
+                .collect();
+            let got = probe.iter().sum::<f64>() / probe.len() as f64 / load;
+            let want = last_row(&table, "bottom_pressure_over_load");
+            // f32 pressures (2^-24 relative) against the table's 11 digits.
+            assert!(
+                (got - want).abs() <= 1e-6 * want.abs().max(1e-3),
+                "{kind}: bottom pressure / load {got} vs series.csv {want}"
             );
         }
     }

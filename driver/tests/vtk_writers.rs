@@ -103,24 +103,143 @@ fn particle_file_holds_the_engine_state_exactly() {
     }
     let speed = values(&v, "speed");
     assert!(speed.iter().any(|&s| s > 0.0), "the block moves");
-    // Contacts: each counted once per grain, forces equal and opposite (third law: they sum to ~0).
+    // Contacts: each grain–grain contact counted once per grain, each platen contact once.
     let count: f64 = values(&v, "contact_count").iter().sum();
-    assert_eq!(count as usize, 2 * w.active_contacts());
-    assert!(w.active_contacts() > 0);
-    let cf = values(&v, "contact_force");
-    let (sx, sy): (f64, f64) =
-        (0..n).fold((0.0, 0.0), |(x, y), i| (x + cf[3 * i], y + cf[3 * i + 1]));
+    let platen_contacts: usize = w.platens.iter().map(|p| p.contacts).sum();
+    assert!(w.active_contacts() > 0 && platen_contacts > 0);
+    assert_eq!(count as usize, 2 * w.active_contacts() + platen_contacts);
+    // Force balance of the contacts: grain–grain forces are equal and opposite (third law), so the contact
+    // forces on all grains sum to what the platens push with, minus the reactions the run reports for them
+    // (the platens' stresses); and the platen part alone (`wall_force`) sums to the same.
+    let (cf, wf) = (values(&v, "contact_force"), values(&v, "wall_force"));
+    let sum = |a: &[f64]| (0..n).fold([0.0, 0.0], |s, i| [s[0] + a[3 * i], s[1] + a[3 * i + 1]]);
+    let reaction = w.platens.iter().fold([0.0, 0.0], |s, p| {
+        [s[0] - p.reaction[0], s[1] - p.reaction[1]]
+    });
     let scale: f64 = (0..n).map(|i| cf[3 * i].hypot(cf[3 * i + 1])).sum();
-    assert!(scale > 0.0);
-    // Summing ~200 pair forces: roundoff of a few ulps of the total magnitude.
-    assert!(
-        sx.hypot(sy) <= 1e-12 * scale,
-        "contact forces sum to ({sx}, {sy})"
-    );
+    let platen_scale: f64 = w
+        .platens
+        .iter()
+        .map(|p| p.reaction[0].hypot(p.reaction[1]))
+        .sum();
+    assert!(scale > 0.0 && platen_scale > 0.0);
+    // Summing ~200 pair forces and ~30 platen forces in another order: roundoff of a few ulps of the total
+    // magnitude.
+    for (what, s) in [("contact_force", sum(cf)), ("wall_force", sum(wf))] {
+        assert!(
+            (s[0] - reaction[0]).hypot(s[1] - reaction[1]) <= 1e-12 * scale,
+            "{what} sums to {s:?}, the platens' reactions to {reaction:?}"
+        );
+    }
+    // Grain by grain: the platen part is that of the grains touching a platen only, and the grain–grain part
+    // (contact − wall) matches the world's own per-grain sums.
+    let (grain, _) = w.contact_loads().unwrap();
+    let (wall, wall_count) = w.wall_contact_loads().unwrap();
+    for i in 0..n {
+        assert_eq!(&wf[3 * i..3 * i + 2], &wall[i]);
+        assert_eq!(cf[3 * i], grain[i][0] + wall[i][0]);
+        assert_eq!(cf[3 * i + 1], grain[i][1] + wall[i][1]);
+        if wall_count[i] == 0 {
+            assert_eq!(&wf[3 * i..3 * i + 2], &[0.0, 0.0]);
+        }
+    }
+    assert!(wall_count.iter().any(|&c| c > 0));
     // Bonds per grain and the broken fraction agree with the bond list.
     let bonds = values(&v, "bonds");
     assert_eq!(bonds.iter().sum::<f64>() as usize, 2 * w.bonds.len());
     assert_eq!(values(&v, "broken_bond_fraction"), w.broken_bond_fraction());
+}
+
+#[test]
+fn a_grain_resting_on_a_platen_carries_its_weight_as_wall_force() {
+    // One disc on a fixed horizontal platen under gravity, damped to rest: statics says the platen pushes it
+    // up with its weight m g, and nothing else touches it. The file's `wall_force` and `contact_force` must
+    // both say so (grain–grain contacts alone would leave the grain unbalanced), and the platen's reaction is
+    // the opposite.
+    let (r, g) = (0.1, 981.0);
+    let disc = Particle::disc(vector(0.0, r), r, 2.65);
+    let mut w = DemWorld::new(vec![disc], model(), 1e-5).unwrap();
+    w.gravity = vector(0.0, -g);
+    w.local_damping = 0.7;
+    w.platens.push(Platen::new(
+        vector(0.0, 0.0),
+        vector(0.0, 1.0),
+        1.0,
+        PlatenControl::Speed(0.0),
+    ));
+    for _ in 0..20_000 {
+        w.step();
+    }
+    let weight = w.particles[0].mass * g;
+    let v = parse_vtk_xml(&particles_vtp(&stamp(0.2), &w, None)).unwrap();
+    let (wf, cf) = (values(&v, "wall_force"), values(&v, "contact_force"));
+    assert_eq!(values(&v, "contact_count"), [1.0]);
+    assert_eq!(
+        wf, cf,
+        "no grain–grain contact: the contact force is the platen's"
+    );
+    // At rest after 20 000 damped steps (period of the contact oscillation ~ 2π√(m/k) ≈ 30 steps): the
+    // residual acceleration is below 1e-9 of g.
+    assert!(
+        (wf[1] - weight).abs() <= 1e-9 * weight && wf[0].abs() <= 1e-9 * weight,
+        "wall force {wf:?}, weight {weight}"
+    );
+    let reaction = w.platens[0].reaction;
+    assert_eq!([-reaction[0], -reaction[1]], [wf[0], wf[1]]);
+}
+
+#[test]
+fn a_world_in_lattice_units_is_written_in_physical_units() {
+    // A world whose numbers are lattice units with h = 0.5 cm, Δt = 0.25 s and a mass unit of 3 g: by
+    // dimensional analysis lengths are × 0.5, velocities × 2 (h/Δt), spins × 4 (1/Δt), masses × 3, moments of
+    // inertia × 0.75 (m h²), forces × 24 (m h/Δt²), torques × 12 (m h²/Δt²).
+    let p = loaded_block();
+    let w = &p.world;
+    let n = w.particles.len();
+    let fluid: Vec<([f64; 2], f64)> = (0..n).map(|i| ([1.0, -2.0], i as f64)).collect();
+    let scale = Scale {
+        length: 0.5,
+        time: 0.25,
+        mass: 3.0,
+    };
+    let st = Stamp {
+        units: Units::of(UnitSystem::Cgs).scaled(scale),
+        ..stamp(1.0)
+    };
+    let v = parse_vtk_xml(&particles_vtp(&st, w, Some(&fluid))).unwrap();
+    let one = parse_vtk_xml(&particles_vtp(&stamp(1.0), w, Some(&fluid))).unwrap();
+    // Scaling by powers of two is exact, by 3, 0.75, 24 and 12 one rounding; contact_force scales its grain and
+    // platen parts before adding them, so it differs from the scaled sum by a few ulps of those parts (of the
+    // size of the array's largest value).
+    for (name, factor) in [
+        ("velocity", 2.0),
+        ("speed", 2.0),
+        ("angular_velocity", 4.0),
+        ("semi_axes", 0.5),
+        ("glyph_scale", 0.5),
+        ("shape_tensor", 0.5),
+        ("mass", 3.0),
+        ("moment_of_inertia", 0.75),
+        ("contact_force", 24.0),
+        ("wall_force", 24.0),
+        ("fluid_force", 24.0),
+        ("fluid_torque", 12.0),
+        ("orientation", 1.0),
+        ("contact_count", 1.0),
+    ] {
+        let (a, b) = (values(&v, name), values(&one, name));
+        let largest = a.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+        for (x, y) in a.iter().zip(b) {
+            assert!(
+                (x - factor * y).abs() <= 1e-14 * largest,
+                "{name}: {x} vs {factor} × {y}"
+            );
+        }
+    }
+    for (a, b) in v.points.iter().zip(&one.points) {
+        assert_eq!(*a, [0.5 * b[0], 0.5 * b[1], 0.0]);
+    }
+    assert_eq!(v.unit("velocity"), Some("cm/s"));
 }
 
 #[test]
@@ -157,7 +276,7 @@ fn shape_tensor_and_glyph_scale_describe_the_true_ellipse() {
     assert_eq!(values(&v, "semi_axes"), [0.3, 0.1, 0.0]);
     let m = values(&v, "major_axis");
     assert!((m[0] - c).abs() < 1e-15 && (m[1] - s).abs() < 1e-15);
-    // No fluid: no fluid arrays; no step yet: the contact loads are written as zeros (with a warning).
+    // No fluid: no fluid arrays; a lone grain touches nothing (its contact loads, those of the next step, are 0).
     assert!(v.point("fluid_force").is_none());
     assert_eq!(values(&v, "contact_count"), [0.0]);
 }

@@ -139,8 +139,11 @@ impl<T: Real> CoupledWorld<T> {
 
     /// The fluid's force and torque on each grain from the last coupled step (physical units), read back from
     /// the loads handed to the DEM minus [`CoupledWorld::applied`] (exact where nothing else is applied; else
-    /// to the rounding of that sum). Read-only.
+    /// to the rounding of that sum); zeros before the first coupled step (no fluid has acted yet). Read-only.
     pub fn fluid_loads(&self) -> Vec<([f64; 2], f64)> {
+        if self.steps == 0 {
+            return vec![([0.0; 2], 0.0); self.dem.particles.len()];
+        }
         self.dem
             .external_force
             .iter()
@@ -190,6 +193,15 @@ impl<T: Real> CoupledWorld<T> {
                 }
             })
             .collect()
+    }
+
+    /// Map the grains onto the lattice as they are now (coverage ε and rigid velocities at the nodes), as the
+    /// next [`CoupledWorld::step`] does first: for looking at the lattice before the first step (a snapshot at
+    /// t = 0). The next step maps the same grains again, which gives bitwise the same coverage (the coverage is a
+    /// function of the grains only), so calling this never changes a result.
+    pub fn map_grains(&mut self) {
+        let bodies = self.bodies();
+        self.fluid.cover_with_bodies(&bodies, self.weighting);
     }
 
     /// One coupled step: map grains → fluid step → fluid loads → DEM step(s).

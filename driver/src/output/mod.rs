@@ -11,6 +11,7 @@ use crate::error::{LbdemError, Result};
 
 pub mod plot;
 pub mod pvd;
+pub mod snapshots;
 pub mod summary;
 pub mod vtk;
 

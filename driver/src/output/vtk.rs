@@ -115,7 +115,56 @@ impl Array {
     }
 }
 
-/// Labels of the units of the arrays (2-D, unit thickness: mass, force and torque per unit thickness).
+/// Factors turning the world's numbers into the labelled units: a world simulated in lattice units (h = Δt = ρ₀ =
+/// 1, e.g. `terminal_velocity`) is written in physical units with the lattice spacing, step and ρ₀ h² (mass per
+/// unit thickness). Every factor is 1 for a world in physical units, and multiplying by 1 is exact: the files
+/// then hold bitwise the simulation's numbers.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Scale {
+    /// Length of one world length unit.
+    pub length: f64,
+    /// Duration of one world time unit.
+    pub time: f64,
+    /// Mass of one world mass unit.
+    pub mass: f64,
+}
+
+impl Scale {
+    /// The world is in the labelled units already.
+    pub const ONE: Scale = Scale {
+        length: 1.0,
+        time: 1.0,
+        mass: 1.0,
+    };
+
+    /// The world is in the lattice units of `units` (h = Δt = ρ₀ = 1): length h, time Δt, mass ρ₀ h².
+    pub fn lattice(units: &crate::units::LatticeUnits) -> Self {
+        Scale {
+            length: units.spacing,
+            time: units.timestep,
+            mass: units.density * units.spacing * units.spacing,
+        }
+    }
+
+    fn velocity(&self) -> f64 {
+        self.length / self.time
+    }
+    fn rate(&self) -> f64 {
+        1.0 / self.time
+    }
+    fn force(&self) -> f64 {
+        self.mass * self.length / (self.time * self.time)
+    }
+    fn torque(&self) -> f64 {
+        self.force() * self.length
+    }
+    fn inertia(&self) -> f64 {
+        self.mass * self.length * self.length
+    }
+}
+
+/// Labels of the units of the arrays (2-D, unit thickness: mass, force and torque per unit thickness), and the
+/// factors from the world's numbers to them.
 #[derive(Clone, Copy, Debug)]
 pub struct Units {
     /// Length.
@@ -132,6 +181,8 @@ pub struct Units {
     pub inertia: &'static str,
     /// Pressure.
     pub pressure: &'static str,
+    /// From the world's numbers to these units ([`Scale::ONE`] from [`Units::of`]).
+    pub scale: Scale,
 }
 
 impl Units {
@@ -150,7 +201,13 @@ impl Units {
             torque,
             inertia,
             pressure: l.pressure,
+            scale: Scale::ONE,
         }
+    }
+
+    /// The same labels for a world whose numbers are turned into them by `scale`.
+    pub fn scaled(self, scale: Scale) -> Self {
+        Units { scale, ..self }
     }
 }
 
@@ -340,14 +397,25 @@ fn polydata(
 }
 
 /// The arrays of every grain (see `docs/outputs.md`). `fluid`: the fluid's force and torque on each grain
-/// (coupled runs); `contacts`: the particle–particle contact force and count of each grain
-/// ([`DemWorld::contact_loads`]; zeros with a warning when the world has not been stepped in this process).
+/// (coupled runs, in the world's units like everything else; `units.scale` turns them into the labelled ones);
+/// the contact loads: [`DemWorld::contact_loads`] (grain–grain) plus [`DemWorld::wall_contact_loads`]
+/// (platens) of the last step, or of the next step when the world has not been stepped in this process.
 pub fn particle_arrays<T: Real>(
     w: &DemWorld<T>,
     fluid: Option<&[([f64; 2], f64)]>,
     units: &Units,
 ) -> Vec<Array> {
     let f = |x: T| x.to_f64_exact();
+    let sc = units.scale;
+    let (len, vel, rate, mass_s, force_s, torque_s, inertia_s) = (
+        sc.length,
+        sc.velocity(),
+        sc.rate(),
+        sc.mass,
+        sc.force(),
+        sc.torque(),
+        sc.inertia(),
+    );
     let p = &w.particles;
     let n = p.len();
     let v3 = |g: &dyn Fn(usize) -> [f64; 2]| -> Values {
@@ -365,21 +433,26 @@ pub fn particle_arrays<T: Real>(
         .iter()
         .map(|q| {
             let (a, b) = q.shape.semi_axes();
-            (f(a), f(b))
+            (f(a) * len, f(b) * len)
         })
         .collect();
-    let (contact_force, contact_count) = match w.contact_loads() {
-        Some((force, count)) => (
-            force.iter().map(|v| [f(v[0]), f(v[1])]).collect::<Vec<_>>(),
-            count,
-        ),
-        None => {
-            eprintln!(
-                "lbdem: WARNING: the contact forces are not known before the first step after a resume: contact_force and contact_count are written as 0"
-            );
-            (vec![[0.0; 2]; n], vec![0; n])
-        }
-    };
+    let velocity: Vec<[f64; 2]> = p
+        .iter()
+        .map(|q| [f(q.velocity[0]) * vel, f(q.velocity[1]) * vel])
+        .collect();
+    // The contact forces of the last step; before the first step in this process (at the start of a run, or
+    // right after a resume: they are not checkpointed) those the next step will apply, from a copy of the world
+    // stepped once (the copy is dropped; the world is not touched).
+    let loads = |w: &DemWorld<T>| w.contact_loads().zip(w.wall_contact_loads());
+    let ((gf, gc), (wf, wc)) = loads(w).unwrap_or_else(|| {
+        let mut probe = w.clone();
+        probe.step();
+        loads(&probe).expect("a stepped world knows its contact loads")
+    });
+    let to = |v: &[T; 2]| [f(v[0]) * force_s, f(v[1]) * force_s];
+    let grain_force: Vec<[f64; 2]> = gf.iter().map(to).collect();
+    let wall_force: Vec<[f64; 2]> = wf.iter().map(to).collect();
+    let contact_count: Vec<u32> = gc.iter().zip(&wc).map(|(a, b)| a + b).collect();
     let broken = w.broken_bond_fraction();
     let mut bonds = vec![0i64; n];
     for b in &w.bonds {
@@ -407,21 +480,16 @@ pub fn particle_arrays<T: Real>(
             "speed",
             1,
             units.velocity,
-            s1(&|i| f(p[i].velocity[0]).hypot(f(p[i].velocity[1]))),
+            s1(&|i| velocity[i][0].hypot(velocity[i][1])),
         ),
-        Array::new(
-            "velocity",
-            3,
-            units.velocity,
-            v3(&|i| [f(p[i].velocity[0]), f(p[i].velocity[1])]),
-        ),
+        Array::new("velocity", 3, units.velocity, v3(&|i| velocity[i])),
         Array::new("shape_tensor", 9, units.length, Values::F64(tensor)),
         Array::new("id", 1, "", Values::I64((0..n as i64).collect())),
         Array::new(
             "angular_velocity",
             1,
             "rad/s",
-            s1(&|i| f(p[i].angular_velocity)),
+            s1(&|i| f(p[i].angular_velocity) * rate),
         ),
         Array::new("orientation", 1, "rad", s1(&|i| f(p[i].angle))),
         Array::new(
@@ -449,7 +517,7 @@ pub fn particle_arrays<T: Real>(
                     .collect(),
             ),
         ),
-        Array::new("mass", 1, units.mass, s1(&|i| f(p[i].mass))),
+        Array::new("mass", 1, units.mass, s1(&|i| f(p[i].mass) * mass_s)),
         // +∞ (rotation locked) is written as −1: the files hold finite numbers only.
         Array::new(
             "moment_of_inertia",
@@ -458,13 +526,26 @@ pub fn particle_arrays<T: Real>(
             s1(&|i| {
                 let j = f(p[i].moment_of_inertia);
                 if j.is_finite() {
-                    j
+                    j * inertia_s
                 } else {
                     -1.0
                 }
             }),
         ),
-        Array::new("contact_force", 3, units.force, v3(&|i| contact_force[i])),
+        // Every contact force on the grain: grain–grain plus platen (what balances the bonds', the fluid's and
+        // the applied loads); the platen part alone is `wall_force`.
+        Array::new(
+            "contact_force",
+            3,
+            units.force,
+            v3(&|i| {
+                [
+                    grain_force[i][0] + wall_force[i][0],
+                    grain_force[i][1] + wall_force[i][1],
+                ]
+            }),
+        ),
+        Array::new("wall_force", 3, units.force, v3(&|i| wall_force[i])),
         Array::new(
             "contact_count",
             1,
@@ -475,12 +556,17 @@ pub fn particle_arrays<T: Real>(
         Array::new("broken_bond_fraction", 1, "1", Values::F64(broken)),
     ];
     if let Some(fl) = fluid {
-        out.push(Array::new("fluid_force", 3, units.force, v3(&|i| fl[i].0)));
+        out.push(Array::new(
+            "fluid_force",
+            3,
+            units.force,
+            v3(&|i| [fl[i].0[0] * force_s, fl[i].0[1] * force_s]),
+        ));
         out.push(Array::new(
             "fluid_torque",
             1,
             units.torque,
-            s1(&|i| fl[i].1),
+            s1(&|i| fl[i].1 * torque_s),
         ));
     }
     out
@@ -495,7 +581,12 @@ pub fn particles_vtp<T: Real>(
     let points: Vec<[f64; 2]> = w
         .particles
         .iter()
-        .map(|p| [p.position[0].to_f64_exact(), p.position[1].to_f64_exact()])
+        .map(|p| {
+            [
+                p.position[0].to_f64_exact() * stamp.units.scale.length,
+                p.position[1].to_f64_exact() * stamp.units.scale.length,
+            ]
+        })
         .collect();
     polydata(
         stamp,
@@ -531,6 +622,7 @@ pub const BREAK_UNRECORDED: u8 = 4;
 /// The arrays of every bond (cell data; see `docs/outputs.md`).
 pub fn bond_arrays<T: Real>(w: &DemWorld<T>, clock: BreakClock, units: &Units) -> Vec<Array> {
     let f = |x: T| x.to_f64_exact();
+    let force_s = units.scale.force();
     let m = w.bonds.len();
     let records: HashMap<[usize; 2], (u64, BreakMode)> = w
         .breaks
@@ -588,9 +680,9 @@ pub fn bond_arrays<T: Real>(w: &DemWorld<T>, clock: BreakClock, units: &Units) -
                 }
             }
         };
-        normal.push(fnorm);
-        shear.push(fshear);
-        stretch.push(ext);
+        normal.push(fnorm * force_s);
+        shear.push(fshear * force_s);
+        stretch.push(ext * units.scale.length);
         ratio.push(r);
         match (intact, records.get(&b.pair)) {
             (true, _) => {
@@ -641,7 +733,12 @@ pub fn bonds_vtp<T: Real>(stamp: &Stamp, w: &DemWorld<T>, clock: BreakClock) -> 
     let points: Vec<[f64; 2]> = w
         .particles
         .iter()
-        .map(|p| [p.position[0].to_f64_exact(), p.position[1].to_f64_exact()])
+        .map(|p| {
+            [
+                p.position[0].to_f64_exact() * stamp.units.scale.length,
+                p.position[1].to_f64_exact() * stamp.units.scale.length,
+            ]
+        })
         .collect();
     let pairs: Vec<[usize; 2]> = w.bonds.iter().map(|b| b.pair).collect();
     let ids = Array::new("id", 1, "", Values::I64((0..points.len() as i64).collect()));
@@ -674,6 +771,80 @@ pub fn node_kinds<T: Real>(lattice: &FluidLattice<T>, solid_fraction: &[f64]) ->
             }
         })
         .collect()
+}
+
+/// Where a lattice lies and how its numbers turn into physical ones, for [`lattice_field`].
+#[derive(Clone, Copy, Debug)]
+pub struct LatticeFrame {
+    /// Physical position of node (0, 0).
+    pub origin: [f64; 2],
+    /// Node spacing h (physical length).
+    pub spacing: f64,
+    /// Physical velocity of a lattice velocity of 1 (c = h/Δt).
+    pub velocity: f64,
+    /// Physical pressure of a lattice density change of 1 (ρ₀ c_s²).
+    pub pressure: f64,
+    /// Lattice density whose pressure is written as 0 (the drained boundary's, or the initial one).
+    pub reference_density: f64,
+}
+
+impl LatticeFrame {
+    /// The frame of `units` with node (0, 0) at `origin` and pressure 0 at `reference_density`.
+    pub fn of(
+        units: &crate::units::LatticeUnits,
+        origin: [f64; 2],
+        reference_density: f64,
+    ) -> Self {
+        LatticeFrame {
+            origin,
+            spacing: units.spacing,
+            velocity: units.lattice_speed,
+            pressure: units.density * units.sound_speed * units.sound_speed,
+            reference_density,
+        }
+    }
+
+    /// Lattice units (h = Δt = ρ₀ = 1, c_s² = 1/3), node (0, 0) at the origin, pressure 0 at density 1.
+    pub fn lattice_units() -> Self {
+        LatticeFrame {
+            origin: [0.0; 2],
+            spacing: 1.0,
+            velocity: 1.0,
+            pressure: 1.0 / 3.0,
+            reference_density: 1.0,
+        }
+    }
+}
+
+/// The [`Field`] of a lattice in the physical units of `frame`: pressure `frame.pressure · (ρ − ρ_ref)`,
+/// velocity, the solid fraction of its current coverage, and the node kinds.
+pub fn lattice_field<T: Real>(lattice: &FluidLattice<T>, frame: &LatticeFrame) -> Field {
+    let (rho, u) = lattice.moments();
+    let pressure: Vec<f64> = rho
+        .iter()
+        .map(|r| frame.pressure * (r.to_f64_exact() - frame.reference_density))
+        .collect();
+    let velocity: Vec<[f64; 2]> = u
+        .iter()
+        .map(|v| {
+            [
+                v[0].to_f64_exact() * frame.velocity,
+                v[1].to_f64_exact() * frame.velocity,
+            ]
+        })
+        .collect();
+    let solid_fraction = lattice.solid_fraction_map();
+    let node_kind = node_kinds(lattice, &solid_fraction);
+    let shape = lattice.shape();
+    Field {
+        nodes: [shape.nx, shape.ny],
+        origin: frame.origin,
+        spacing: frame.spacing,
+        pressure,
+        velocity,
+        solid_fraction,
+        node_kind,
+    }
 }
 
 /// The lattice arrays (point data; `Float32` except the node kind).

@@ -217,6 +217,65 @@ pub struct CheckpointSection {
     pub checkpoint_interval: CheckpointInterval,
 }
 
+/// `[output]` of the kinds with moving grains whose only outputs besides their tables are the VTK snapshots
+/// (`coupled_demo`, `terminal_velocity`, `consolidation`, `terzaghi`): the particle (and bond) and lattice series
+/// with their `.pvd` collections (docs/outputs.md).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SnapshotSection {
+    /// Write VTK snapshots (default true).
+    #[serde(default = "yes")]
+    pub vtk: bool,
+    /// Model time between snapshots (the kind's time unit: s, or steps for scenes in lattice units); default a
+    /// tenth of the run (11 snapshots with the first and the last); 0: only the first and the last.
+    #[serde(default)]
+    pub snapshot_interval: Option<f64>,
+}
+
+fn yes() -> bool {
+    true
+}
+
+impl Default for SnapshotSection {
+    fn default() -> Self {
+        Self {
+            vtk: true,
+            snapshot_interval: None,
+        }
+    }
+}
+
+impl SnapshotSection {
+    /// Snapshots a run writes by default: one every tenth of the run, plus the first.
+    pub const DEFAULT_PER_RUN: u64 = 10;
+
+    /// Range check naming `output.snapshot_interval`.
+    pub fn validate(&self) -> Result<()> {
+        match self.snapshot_interval {
+            Some(t) if !(t.is_finite() && t >= 0.0) => Err(LbdemError::field(
+                "output.snapshot_interval",
+                t,
+                "must be finite and >= 0",
+                "0 writes only the first and last snapshot; leave it out for one every tenth of the run",
+            )),
+            _ => Ok(()),
+        }
+    }
+
+    /// Steps between snapshots for a run of `total` steps of `dt` (0: only the first and the last); `None`
+    /// when `vtk = false`.
+    pub fn every(&self, dt: f64, total: u64) -> Option<u64> {
+        if !self.vtk {
+            return None;
+        }
+        Some(match self.snapshot_interval {
+            None => total.div_ceil(Self::DEFAULT_PER_RUN).max(1),
+            Some(t) if t > 0.0 => ((t / dt).round() as u64).max(1),
+            Some(_) => 0,
+        })
+    }
+}
+
 pub(crate) use crate::error::positive;
 
 /// The derived set-up of a scene whose lattice is sized by the kind at start: the lattice units and the

@@ -239,6 +239,10 @@ pub struct DemWorld<T> {
     wall_forces: Vec<WallContactForce<T>>,
     #[serde(skip)]
     wall_loads: Vec<WallLoad<T>>,
+    /// Whether `contact_forces` and `wall_forces` hold the last step's loads (false until this process steps
+    /// the world, and after [`DemWorld::forget_contact_loads`]).
+    #[serde(skip)]
+    loads_known: bool,
     force: Vec<Vector<T>>,
     torque: Vec<T>,
     wall_shear: Vec<T>,
@@ -297,6 +301,7 @@ impl<T: Real> DemWorld<T> {
             wall_bodies: Vec::new(),
             wall_forces: Vec::new(),
             wall_loads: Vec::new(),
+            loads_known: false,
             force: Vec::new(),
             torque: Vec::new(),
             wall_shear: Vec::new(),
@@ -342,7 +347,7 @@ impl<T: Real> DemWorld<T> {
     /// [`DemWorld::active_contacts`] counts them). Read-only; `None` before this process has stepped the world
     /// (the per-pair forces are not checkpointed, so a world just loaded from a checkpoint has none yet).
     pub fn contact_loads(&self) -> Option<(Vec<[T; 2]>, Vec<u32>)> {
-        if self.contact_forces.len() != self.pairs.len() {
+        if !self.loads_known || self.contact_forces.len() != self.pairs.len() {
             return None;
         }
         let n = self.particles.len();
@@ -359,6 +364,42 @@ impl<T: Real> DemWorld<T> {
             }
         }
         Some((force, count))
+    }
+
+    /// Platen (wall) contact loads of the last step, per particle: the summed force of every platen on the
+    /// particle and the number of platens touching it (what the platens' `reaction`s are summed from, with the
+    /// opposite sign). Read-only; `None` before this process has stepped the world (the per-contact wall forces
+    /// are not checkpointed). A world without platens has zeros.
+    pub fn wall_contact_loads(&self) -> Option<(Vec<[T; 2]>, Vec<u32>)> {
+        let n = self.particles.len();
+        let walls = self.platens.len();
+        let mut force = vec![[T::zero(); 2]; n];
+        let mut count = vec![0u32; n];
+        if !self.loads_known {
+            return None;
+        }
+        if walls == 0 {
+            return Some((force, count));
+        }
+        if self.wall_forces.len() != n * walls {
+            return None;
+        }
+        for (i, row) in self.wall_forces.chunks(walls).enumerate() {
+            for slot in row.iter().filter(|s| s.touching) {
+                force[i][0] += slot.force_on_particle[0];
+                force[i][1] += slot.force_on_particle[1];
+                count[i] += 1;
+            }
+        }
+        Some((force, count))
+    }
+
+    /// Make [`DemWorld::contact_loads`] and [`DemWorld::wall_contact_loads`] answer `None` until the next step,
+    /// as for a world just loaded from a checkpoint, so that what is written about a state does not depend on
+    /// whether this process stepped the world before (e.g. the snapshot before a run's first step). The loads
+    /// are scratch of the last step: nothing else changes.
+    pub fn forget_contact_loads(&mut self) {
+        self.loads_known = false;
     }
 
     /// Candidate pairs of the last broad phase (sorted).
@@ -717,6 +758,7 @@ impl<T: Real> DemWorld<T> {
         for (t, e) in self.torque.iter_mut().zip(&self.external_torque) {
             *t += *e;
         }
+        self.loads_known = true;
 
         // Integrate (the kernel's pass, in parallel chunks); held particles stay where they are.
         let (gravity, alpha) = (self.gravity, self.local_damping);

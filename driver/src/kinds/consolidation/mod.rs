@@ -16,9 +16,11 @@ use crate::engine::lattice::FluidLattice;
 use crate::error::{positive, LbdemError, Result};
 use crate::input::limits::{self, Budget};
 use crate::observe::health::{dem_health, finite, fluid_health};
+use crate::output::snapshots::{write_coupled, SnapshotClock};
+use crate::output::vtk::{LatticeFrame, Stamp, Units};
 use crate::output::{csv, write_atomic};
 use crate::run::{run_in_memory, Case, Kind, OutputStage, Persist, RunOptions};
-use crate::scene::{CheckpointSection, SceneHeader, UnitsSetup};
+use crate::scene::{CheckpointSection, SceneHeader, SnapshotSection, UnitsSetup};
 use crate::units::FluidSection;
 
 /// `[consolidation]`
@@ -59,6 +61,9 @@ pub struct ConsolidationScene {
     pub fluid: FluidSection,
     /// `[consolidation]`
     pub consolidation: ConsolidationSection,
+    /// `[output]`: VTK snapshots.
+    #[serde(default)]
+    pub output: SnapshotSection,
     /// `[run]`
     #[serde(default)]
     pub run: CheckpointSection,
@@ -95,6 +100,7 @@ pub struct ConsolidationState {
     s: u64,
     series: Vec<[f64; 2]>,
     peak: (f64, f64),
+    snapshots: SnapshotClock,
 }
 
 impl Persist for ConsolidationState {}
@@ -180,6 +186,7 @@ fn start(case: &Case<Consolidation>, exec: &Exec) -> Result<ConsolidationState> 
         s: 0,
         series: Vec::new(),
         peak: (0.0, f64::NEG_INFINITY),
+        snapshots: SnapshotClock::default(),
     })
 }
 
@@ -222,6 +229,31 @@ impl ConsolidationState {
         Ok(())
     }
 
+    /// The next VTK snapshot (grains, lattice with the pore pressure above the drained top).
+    fn snapshot(&mut self, case: &Case<Consolidation>, dir: &Path, every: u64) -> Result<()> {
+        let u = &case.setup.units;
+        let stamp = Stamp {
+            time: self.s as f64 * u.timestep,
+            title: case
+                .scene
+                .scene
+                .name
+                .clone()
+                .unwrap_or_else(|| "lbdem consolidation".into()),
+            units: Units::of(case.scene.scene.units),
+        };
+        let frame = LatticeFrame::of(u, self.world.map.origin, 1.0);
+        write_coupled(
+            dir,
+            &mut self.snapshots,
+            every,
+            self.s,
+            &stamp,
+            &mut self.world,
+            &frame,
+        )
+    }
+
     fn outcome(&self) -> ConsolidationOutcome {
         ConsolidationOutcome {
             nodes: [self.nx, self.ny],
@@ -257,6 +289,7 @@ impl Kind for Consolidation {
 
     fn validate(scene: &ConsolidationScene) -> Result<()> {
         scene.scene.require_f64()?;
+        scene.output.validate()?;
         let u = scene.fluid.lattice_units()?;
         scene
             .fluid
@@ -426,9 +459,23 @@ impl Kind for Consolidation {
     fn advance(
         case: &Case<Self>,
         state: &mut ConsolidationState,
-        _dir: Option<&Path>,
+        dir: Option<&Path>,
     ) -> Result<()> {
-        state.advance(case)
+        let Some((dir, every)) = dir.zip(
+            case.scene
+                .output
+                .every(case.setup.units.timestep, state.steps),
+        ) else {
+            return state.advance(case);
+        };
+        if state.snapshots.first_due() {
+            state.snapshot(case, dir, every)?;
+        }
+        state.advance(case)?;
+        if state.snapshots.due(state.s, every, state.s >= state.steps) {
+            state.snapshot(case, dir, every)?;
+        }
+        Ok(())
     }
 
     fn health(_case: &Case<Self>, state: &ConsolidationState) -> Result<()> {

@@ -20,7 +20,8 @@
 //! ```
 //!
 //! Outputs: `series.csv` (step, fluid momentum x/y, grain momentum x/y, grain kinetic energy, fluid mass),
-//! `summary.json` (written last).
+//! the VTK snapshot series `particles_NNNN.vtp` and `lattice_NNNN.vti` with their `.pvd` collections
+//! (`[output] vtk`, `snapshot_interval` in steps; docs/outputs.md), `summary.json` (written last).
 use std::path::Path;
 
 use lbdem_kernels::dem::assembly::ContactModel;
@@ -38,9 +39,11 @@ use crate::engine::lattice::FluidLattice;
 use crate::error::{LbdemError, Result};
 use crate::input::limits::{self, Budget};
 use crate::observe::health::{dem_health, fluid_health};
+use crate::output::snapshots::{write_coupled, SnapshotClock};
+use crate::output::vtk::{LatticeFrame, Stamp, Units};
 use crate::output::{csv, write_atomic};
 use crate::run::{Case, CheckpointInterval, Kind, OutputStage, Persist};
-use crate::scene::{CheckpointSection, UnitSystem};
+use crate::scene::{CheckpointSection, SnapshotSection, UnitSystem};
 use crate::units::TAU_REFUSE_HIGH;
 
 /// `[scene]` of the demo (only `kind` and an optional name).
@@ -86,6 +89,9 @@ pub struct DemoScene {
     pub scene: DemoHeader,
     /// `[demo]`.
     pub demo: DemoSection,
+    /// `[output]`: VTK snapshots (interval in steps).
+    #[serde(default)]
+    pub output: SnapshotSection,
     /// `[run]`.
     #[serde(default)]
     pub run: CheckpointSection,
@@ -159,6 +165,8 @@ pub struct DemoState {
     pub world: CoupledWorld,
     /// Rows of series.csv.
     pub rows: Vec<Vec<f64>>,
+    /// The VTK snapshots written so far.
+    pub snapshots: SnapshotClock,
 }
 
 const COLUMNS: [&str; 7] = [
@@ -204,6 +212,7 @@ impl Kind for CoupledDemo {
     type State = DemoState;
 
     fn validate(s: &DemoScene) -> Result<()> {
+        s.output.validate()?;
         let d = &s.demo;
         if !(1..=4).contains(&d.discs) {
             return Err(LbdemError::field(
@@ -286,6 +295,7 @@ impl Kind for CoupledDemo {
         Ok(DemoState {
             world,
             rows: Vec::new(),
+            snapshots: SnapshotClock::default(),
         })
     }
 
@@ -316,8 +326,37 @@ impl Kind for CoupledDemo {
         state.world.steps() >= case.setup.steps
     }
 
-    fn advance(case: &Case<Self>, state: &mut DemoState, _dir: Option<&Path>) -> Result<()> {
+    fn advance(case: &Case<Self>, state: &mut DemoState, dir: Option<&Path>) -> Result<()> {
         let d = &case.setup;
+        // Lattice units: the model time is the step count.
+        let every = case.scene.output.every(1.0, d.steps);
+        let snapshot = |state: &mut DemoState, dir: &Path, every: u64| {
+            let step = state.world.steps();
+            let stamp = Stamp {
+                time: step as f64,
+                title: case
+                    .scene
+                    .scene
+                    .name
+                    .clone()
+                    .unwrap_or_else(|| "lbdem coupled_demo".into()),
+                units: Units::of(UnitSystem::Cgs),
+            };
+            write_coupled(
+                dir,
+                &mut state.snapshots,
+                every,
+                step,
+                &stamp,
+                &mut state.world,
+                &LatticeFrame::lattice_units(),
+            )
+        };
+        if let (Some(dir), Some(every)) = (dir, every) {
+            if state.snapshots.first_due() {
+                snapshot(state, dir, every)?;
+            }
+        }
         let n = d.record_interval.min(d.steps - state.world.steps());
         for _ in 0..n {
             state.world.step();
@@ -326,6 +365,12 @@ impl Kind for CoupledDemo {
         Self::health(case, state)?;
         let row = state.row();
         state.rows.push(row);
+        if let (Some(dir), Some(every)) = (dir, every) {
+            let step = state.world.steps();
+            if state.snapshots.due(step, every, step >= d.steps) {
+                snapshot(state, dir, every)?;
+            }
+        }
         Ok(())
     }
 

@@ -53,8 +53,8 @@ use crate::engine::exec::Exec;
 use crate::error::{non_negative, positive, LbdemError, Result};
 use crate::input::limits::{Budget, GRAIN_BYTES};
 use crate::observe::health::dem_health;
-use crate::output::pvd::write_snapshot;
-use crate::output::vtk::{bonds_vtp, particles_vtp, BreakClock, Stamp, Units};
+use crate::output::snapshots::write_series;
+use crate::output::vtk::{BreakClock, Stamp, Units};
 use crate::output::{csv, write_atomic};
 use crate::run::{Case, Kind, OutputStage, Persist};
 use crate::scene::solid::grain_count;
@@ -367,12 +367,9 @@ impl<T: Real> DryRun<T> {
             units: Units::of(scene.scene.units),
         };
         let index = self.snapshots as usize;
-        let bytes = particles_vtp(&stamp, w, None);
-        write_snapshot(dir, "particles", index, stamp.time, "vtp", &bytes)?;
         // Break times as in broken_bonds.csv: the world's step count times the step.
         let clock = BreakClock { origin_step: 0, dt };
-        let bytes = bonds_vtp(&stamp, w, clock);
-        write_snapshot(dir, "bonds", index, stamp.time, "vtp", &bytes)?;
+        write_series(dir, index, &stamp, w, None, clock, None)?;
         self.snapshots += 1;
         Ok(())
     }

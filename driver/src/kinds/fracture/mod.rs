@@ -46,10 +46,8 @@ use crate::observe::darcy::{permeability, SteadyFlow};
 use crate::observe::fit::fit_diffusivity;
 use crate::observe::health::dem_health;
 use crate::observe::steady::Steadiness;
-use crate::output::pvd::write_snapshot;
-use crate::output::vtk::{
-    bonds_vtp, lattice_vti, node_kinds, particles_vtp, BreakClock, Field, Stamp, Units,
-};
+use crate::output::snapshots::write_series;
+use crate::output::vtk::{lattice_field, BreakClock, LatticeFrame, Stamp, Units};
 use crate::output::{csv, write_atomic, SCENE_COPY};
 use crate::run::{Case, Kind, OutputStage, Persist};
 use crate::scene::solid::grain_count;
@@ -1353,6 +1351,13 @@ impl<'a, S: std::ops::DerefMut<Target = FractureState>> FractureRun<'a, S> {
     fn snapshot(&mut self, out: &Path) -> Result<()> {
         let n = self.state.snapshots;
         self.state.snapshots += 1;
+        // Before the first coupled step the grains are not on the lattice yet: map them (the first step maps
+        // the same grains again, bitwise the same coverage), so that the t = 0 lattice shows them.
+        if let Some(w) = self.state.coupled.as_mut() {
+            if w.steps() == 0 {
+                w.map_grains();
+            }
+        }
         let d = self.dem();
         let title = self
             .scene
@@ -1366,46 +1371,19 @@ impl<'a, S: std::ops::DerefMut<Target = FractureState>> FractureRun<'a, S> {
             title,
             units: Units::of(self.scene.scene.units),
         };
+        // The pore pressure above the drained ends.
+        let field = self.fluid().map(|fp| {
+            let frame =
+                LatticeFrame::of(&fp.setup.units, fp.world.map.origin, fp.setup.density_low);
+            lattice_field(&fp.world.fluid, &frame)
+        });
         if self.scene.output.vtk {
             let fluid = self.state.coupled.as_ref().map(|w| w.fluid_loads());
-            let bytes = particles_vtp(&stamp, d, fluid.as_deref());
-            write_snapshot(out, "particles", n, stamp.time, "vtp", &bytes)?;
             let clock = BreakClock {
                 origin_step: self.state.drop_step,
                 dt: self.state.dt,
             };
-            let bytes = bonds_vtp(&stamp, d, clock);
-            write_snapshot(out, "bonds", n, stamp.time, "vtp", &bytes)?;
-        }
-        let field = self.fluid().map(|fp| {
-            let (rho, u) = fp.world.fluid.moments();
-            let units = fp.setup.units;
-            let p_scale = units.density * units.sound_speed * units.sound_speed;
-            let pressure: Vec<f64> = rho
-                .iter()
-                .map(|r| p_scale * (r - fp.setup.density_low))
-                .collect();
-            let velocity: Vec<[f64; 2]> = u
-                .iter()
-                .map(|v| [v[0] * units.lattice_speed, v[1] * units.lattice_speed])
-                .collect();
-            let solid_fraction = fp.world.fluid.solid_fraction_map();
-            let node_kind = node_kinds(&fp.world.fluid, &solid_fraction);
-            Field {
-                nodes: fp.setup.nodes,
-                origin: fp.world.map.origin,
-                spacing: units.spacing,
-                pressure,
-                velocity,
-                solid_fraction,
-                node_kind,
-            }
-        });
-        if self.scene.output.vtk {
-            if let Some(f) = &field {
-                let bytes = lattice_vti(&stamp, f);
-                write_snapshot(out, "lattice", n, stamp.time, "vti", &bytes)?;
-            }
+            write_series(out, n, &stamp, d, fluid.as_deref(), clock, field.as_ref())?;
         }
         if self.scene.output.figures {
             let time = self.state.steps_done as f64 * self.state.dt;

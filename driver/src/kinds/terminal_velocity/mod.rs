@@ -35,9 +35,13 @@ use crate::engine::lattice::FluidLattice;
 use crate::error::{positive, LbdemError, Result};
 use crate::input::limits::{self, Budget};
 use crate::observe::health::{dem_health, fluid_health};
+use crate::output::snapshots::{write_coupled, SnapshotClock};
+use crate::output::vtk::{LatticeFrame, Scale, Stamp, Units};
 use crate::output::{csv, write_atomic};
 use crate::run::{run_in_memory, Case, Kind, OutputStage, Persist, RunOptions};
-use crate::scene::{check_free_grain_operator, CheckpointSection, SceneHeader, UnitsSetup};
+use crate::scene::{
+    check_free_grain_operator, CheckpointSection, SceneHeader, SnapshotSection, UnitsSetup,
+};
 use crate::units::{collision_of, CollisionName, FluidSection, Warnings};
 
 /// The fluid collision of terminal-velocity scenes without `[fluid] collision`.
@@ -78,6 +82,9 @@ pub struct TerminalVelocityScene {
     pub fluid: FluidSection,
     /// `[terminal_velocity]`
     pub terminal_velocity: TerminalVelocitySection,
+    /// `[output]`: VTK snapshots.
+    #[serde(default)]
+    pub output: SnapshotSection,
     /// `[run]`
     #[serde(default)]
     pub run: CheckpointSection,
@@ -140,6 +147,7 @@ pub struct TerminalState {
     records: Vec<[f64; 5]>,
     window: Vec<f64>,
     done: u64,
+    snapshots: SnapshotClock,
 }
 
 impl Persist for TerminalState {}
@@ -271,6 +279,7 @@ fn start(case: &Case<TerminalVelocity>, exec: &Exec) -> Result<TerminalState> {
         records: Vec::new(),
         window: Vec::new(),
         done: 0,
+        snapshots: SnapshotClock::default(),
     })
 }
 
@@ -388,6 +397,7 @@ impl Kind for TerminalVelocity {
 
     fn validate(scene: &TerminalVelocityScene) -> Result<()> {
         scene.scene.require_f64()?;
+        scene.output.validate()?;
         let u = scene.fluid.lattice_units()?;
 
         let t = &scene.terminal_velocity;
@@ -534,8 +544,45 @@ impl Kind for TerminalVelocity {
         state.done >= state.steps
     }
 
-    fn advance(case: &Case<Self>, state: &mut TerminalState, _dir: Option<&Path>) -> Result<()> {
+    fn advance(case: &Case<Self>, state: &mut TerminalState, dir: Option<&Path>) -> Result<()> {
+        let u = case.setup.units;
+        let every = case.scene.output.every(u.timestep, state.steps);
+        // The disc and the fluid are simulated in lattice units: the files are in the scene's units.
+        let snapshot = |state: &mut TerminalState, dir: &Path, every: u64| {
+            let stamp = Stamp {
+                time: state.done as f64 * u.timestep,
+                title: case
+                    .scene
+                    .scene
+                    .name
+                    .clone()
+                    .unwrap_or_else(|| "lbdem terminal_velocity".into()),
+                units: Units::of(case.scene.scene.units).scaled(Scale::lattice(&u)),
+            };
+            write_coupled(
+                dir,
+                &mut state.snapshots,
+                every,
+                state.done,
+                &stamp,
+                &mut state.world,
+                &LatticeFrame::of(&u, [0.0; 2], 1.0),
+            )
+        };
+        if let (Some(dir), Some(every)) = (dir, every) {
+            if state.snapshots.first_due() {
+                snapshot(state, dir, every)?;
+            }
+        }
         state.advance(case);
+        if let (Some(dir), Some(every)) = (dir, every) {
+            if state
+                .snapshots
+                .due(state.done, every, state.done >= state.steps)
+            {
+                snapshot(state, dir, every)?;
+            }
+        }
         Ok(())
     }
 

@@ -28,9 +28,11 @@ use crate::observe::fit::fit_consolidation;
 use crate::observe::flow::fluid_row_means;
 use crate::observe::health::{dem_health, finite, fluid_health};
 use crate::observe::steady::Steadiness;
+use crate::output::snapshots::{write_coupled, SnapshotClock};
+use crate::output::vtk::{LatticeFrame, Stamp, Units};
 use crate::output::{csv, write_atomic};
 use crate::run::{run_in_memory, Case, Kind, OutputStage, Persist, RunOptions};
-use crate::scene::{CheckpointSection, SceneHeader, UnitsSetup};
+use crate::scene::{CheckpointSection, SceneHeader, SnapshotSection, UnitsSetup};
 use crate::units::{FluidSection, CS2};
 
 /// Lattice density difference of the steady Darcy run (small: Mach ≪ 0.1 and a linear response).
@@ -113,6 +115,9 @@ pub struct TerzaghiScene {
     pub fluid: FluidSection,
     /// `[terzaghi]`
     pub terzaghi: TerzaghiSection,
+    /// `[output]`: VTK snapshots.
+    #[serde(default)]
+    pub output: SnapshotSection,
     /// `[run]`
     #[serde(default)]
     pub run: CheckpointSection,
@@ -219,6 +224,7 @@ pub struct TerzaghiState {
     record_every: u64,
     s: u64,
     profiles: Vec<Profile>,
+    snapshots: SnapshotClock,
 }
 
 impl Persist for TerzaghiState {}
@@ -426,10 +432,36 @@ fn start(case: &Case<Terzaghi>, exec: &Exec) -> Result<TerzaghiState> {
         record_every,
         s: 0,
         profiles: Vec::new(),
+        snapshots: SnapshotClock::default(),
     })
 }
 
 impl TerzaghiState {
+    /// The next VTK snapshot (grains, bonds if any, lattice with the pore pressure above the drained top).
+    fn snapshot(&mut self, case: &Case<Terzaghi>, dir: &Path, every: u64) -> Result<()> {
+        let u = &case.setup.units;
+        let stamp = Stamp {
+            time: self.s as f64 * u.timestep,
+            title: case
+                .scene
+                .scene
+                .name
+                .clone()
+                .unwrap_or_else(|| "lbdem terzaghi".into()),
+            units: Units::of(case.scene.scene.units),
+        };
+        let frame = LatticeFrame::of(u, self.world.map.origin, 1.0);
+        write_coupled(
+            dir,
+            &mut self.snapshots,
+            every,
+            self.s,
+            &stamp,
+            &mut self.world,
+            &frame,
+        )
+    }
+
     fn advance(&mut self, case: &Case<Terzaghi>) -> Result<()> {
         let u = &case.setup.units;
         let c = &case.scene.terzaghi;
@@ -684,6 +716,7 @@ impl Kind for Terzaghi {
 
     fn validate(scene: &TerzaghiScene) -> Result<()> {
         scene.scene.require_f64()?;
+        scene.output.validate()?;
         let u = scene.fluid.lattice_units()?;
         let c = &scene.terzaghi;
         for (field, v, hint) in [
@@ -892,8 +925,23 @@ impl Kind for Terzaghi {
         state.darcy.is_none() && state.s >= state.steps
     }
 
-    fn advance(case: &Case<Self>, state: &mut TerzaghiState, _dir: Option<&Path>) -> Result<()> {
-        state.advance(case)
+    fn advance(case: &Case<Self>, state: &mut TerzaghiState, dir: Option<&Path>) -> Result<()> {
+        // Snapshots of the coupled run after the step load (none during the Darcy measurement before it).
+        let every = case
+            .scene
+            .output
+            .every(case.setup.units.timestep, state.steps);
+        let Some((dir, every)) = dir.zip(every).filter(|_| state.darcy.is_none()) else {
+            return state.advance(case);
+        };
+        if state.snapshots.first_due() {
+            state.snapshot(case, dir, every)?;
+        }
+        state.advance(case)?;
+        if state.snapshots.due(state.s, every, state.s >= state.steps) {
+            state.snapshot(case, dir, every)?;
+        }
+        Ok(())
     }
 
     fn health(_case: &Case<Self>, state: &TerzaghiState) -> Result<()> {
