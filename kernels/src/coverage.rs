@@ -4,7 +4,9 @@
 //! covered area is computed **exactly** (up to roundoff): the area of disc ∩ rectangle is ∫ of the covered chord
 //! length over x, split at the (at most four) abscissae where the circle crosses the rectangle's top and bottom
 //! edges; on each piece the integrand is a constant or ±√(r² − t²), whose primitive is
-//! ½ (t √(r² − t²) + r² asin(t/r)).
+//! ½ (t √(r² − t²) + r² asin(t/r)), evaluated as ½ (t s + r² atan2(t, s)) with the half chord s = √(r² − t²)
+//! carried exactly (|v| at a crossing of the edge y = v) or computed as √((r − t)(r + t)), so that the formula stays
+//! accurate to roundoff where a breakpoint lies near a tangent point t = ±r.
 //!
 //! For an **ellipse** (semi-axes a, b, orientation θ) the covered area is also exact: the affine map
 //! u ↦ ((R(−θ)(u − c))ₓ/a, (R(−θ)(u − c))ᵧ/b) sends the ellipse to the unit disc and the cell to a parallelogram,
@@ -14,17 +16,19 @@
 use crate::math::Point;
 use crate::Real;
 
-/// ∫₀ᵗ √(r² − s²) ds for |t| ≤ r.
+/// √(r² − t²) for |t| ≤ r, as √((r − t)(r + t)): relative error of a few ulp even where t is close to ±r, where
+/// r² − t² would cancel (this is what keeps the disc formula well-conditioned at tangency).
 #[inline]
-fn half_chord_primitive<T: Real>(r: T, t: T) -> T {
-    let t = t.max(-r).min(r);
-    let root = (r * r - t * t).max(T::zero()).sqrt();
-    let ratio = if r > T::zero() {
-        (t / r).max(-T::one()).min(T::one())
-    } else {
-        T::zero()
-    };
-    T::lit(0.5) * (t * root + r * r * ratio.portable_asin())
+fn half_chord<T: Real>(r: T, t: T) -> T {
+    ((r - t) * (r + t)).max(T::zero()).sqrt()
+}
+
+/// ∫₀ᵗ √(r² − s²) ds = ½ (t √(r² − t²) + r² asin(t/r)) for |t| ≤ r, from the abscissa `t` and its half chord
+/// `root` = √(r² − t²). The angle is taken as atan2(t, root), not asin(t/r): asin amplifies the roundoff of t/r
+/// by 1/√(1 − (t/r)²) near the tangent points t = ±r, atan2 of an accurate pair does not.
+#[inline]
+fn half_chord_primitive<T: Real>(r: T, t: T, root: T) -> T {
+    T::lit(0.5) * (t * root + r * r * t.portable_atan2(root))
 }
 
 /// Exact area of the intersection of the disc (centre `c`, radius `r`) with the axis-aligned rectangle
@@ -40,40 +44,41 @@ pub fn disc_rectangle_area<T: Real>(c: Point<T>, r: T, x0: T, x1: T, y0: T, y1: 
     if !(b > a) || v0 >= r || v1 <= -r {
         return T::zero();
     }
-    // Breakpoints: where ±√(r² − v²) = the horizontal edges.
-    let mut pts = [T::zero(); 6];
+    // Breakpoints: where ±√(r² − v²) = the horizontal edges. Each is carried with its half chord √(r² − t²):
+    // at a crossing of the edge y = v that is |v| exactly, at the ends a, b it is computed without cancellation.
+    let mut pts = [(T::zero(), T::zero()); 6];
     let mut n = 0;
-    pts[n] = a;
+    pts[n] = (a, half_chord(r, a));
     n += 1;
     for v in [v0, v1] {
         if v.abs() < r {
-            let w = (r * r - v * v).sqrt();
+            let w = half_chord(r, v);
             for p in [-w, w] {
                 if p > a && p < b {
-                    pts[n] = p;
+                    pts[n] = (p, v.abs());
                     n += 1;
                 }
             }
         }
     }
-    pts[n] = b;
+    pts[n] = (b, half_chord(r, b));
     n += 1;
     // Insertion sort of at most six values.
     for i in 1..n {
         let mut j = i;
-        while j > 0 && pts[j - 1] > pts[j] {
+        while j > 0 && pts[j - 1].0 > pts[j].0 {
             pts.swap(j - 1, j);
             j -= 1;
         }
     }
     let mut area = T::zero();
     for k in 0..n - 1 {
-        let (p, q) = (pts[k], pts[k + 1]);
+        let ((p, root_p), (q, root_q)) = (pts[k], pts[k + 1]);
         if !(q > p) {
             continue;
         }
         let m = T::lit(0.5) * (p + q);
-        let s = (r * r - m * m).max(T::zero()).sqrt();
+        let s = half_chord(r, m);
         // On this piece the top of the covered chord is either the rectangle edge v1 or the circle +s(t), and the
         // bottom is either v0 or −s(t); the choice does not change inside a piece.
         let top_is_edge = v1 < s;
@@ -83,7 +88,7 @@ pub fn disc_rectangle_area<T: Real>(c: Point<T>, r: T, x0: T, x1: T, y0: T, y1: 
         if !(top_mid > bottom_mid) {
             continue;
         }
-        let circle = half_chord_primitive(r, q) - half_chord_primitive(r, p);
+        let circle = half_chord_primitive(r, q, root_q) - half_chord_primitive(r, p, root_p);
         let top = if top_is_edge { v1 * (q - p) } else { circle };
         let bottom = if bottom_is_edge {
             v0 * (q - p)

@@ -44,8 +44,6 @@ pub trait Real:
     }
     /// atan2(self, x), from the `libm` crate.
     fn portable_atan2(self, x: Self) -> Self;
-    /// asin, from the `libm` crate.
-    fn portable_asin(self) -> Self;
     /// hypot(self, y), from the `libm` crate.
     fn portable_hypot(self, y: Self) -> Self;
     /// Natural logarithm, from the `libm` crate.
@@ -73,10 +71,6 @@ impl Real for f64 {
     #[inline]
     fn portable_atan2(self, x: Self) -> Self {
         libm::atan2(self, x)
-    }
-    #[inline]
-    fn portable_asin(self) -> Self {
-        libm::asin(self)
     }
     #[inline]
     fn portable_hypot(self, y: Self) -> Self {
@@ -109,10 +103,6 @@ impl Real for f32 {
     #[inline]
     fn portable_atan2(self, x: Self) -> Self {
         libm::atan2f(self, x)
-    }
-    #[inline]
-    fn portable_asin(self) -> Self {
-        libm::asinf(self)
     }
     #[inline]
     fn portable_hypot(self, y: Self) -> Self {

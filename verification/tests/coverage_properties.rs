@@ -299,16 +299,13 @@ proptest! {
     /// An ellipse with equal semi-axes is the disc, at any orientation; and the disc path is as exact as the
     /// ellipse path under whole-cell translations, quarter turns and in `f32`.
     ///
-    /// KNOWN DEFECT, so ignored (run with `--ignored`): the disc formula, ½(t√(r² − t²) + r² asin(t/r))
-    /// between the abscissae where the circle crosses the cell's edges, is ill-conditioned where such a
-    /// crossing lies near the circle's tangent point (√(r² − t²) → 0: the error grows like ε r³/√(r² − t²)).
-    /// Measured: 2.6e-11 of a cell in f64 at r = 16.26 (a 40-digit quadrature gives 0.25754737820635497, the
-    /// ellipse path 0.2575473782063564, the disc path 0.2575473782320282) and 5.7e-3 of a cell in f32. The
-    /// ellipse path (sectors by atan2) stays within roundoff and is asserted by the tests above. The fix (disc
-    /// fractions by the sector path, or crossings carried as (t, √(r² − t²)) pairs) changes golden bits and is
-    /// an open kernel item.
+    /// This caught an ill-conditioning of the disc formula where a breakpoint lies near a tangent point of the
+    /// circle (the half chord √(r² − t²) → 0; with r² − t² and asin(t/r) the error grew like ε r³/√(r² − t²)):
+    /// 2.6e-11 of a cell in f64 at r = 16.26 (a 40-digit quadrature gives 0.25754737820635497, the ellipse path
+    /// 0.2575473782063564, the old disc path 0.2575473782320282) and 5.7e-3 of a cell in f32. The kernel now
+    /// carries each breakpoint with its half chord and uses atan2; [`disc_near_tangency_regression`] keeps that
+    /// case.
     #[test]
-    #[ignore = "known defect: the disc coverage formula is ill-conditioned near tangency (see the doc comment)"]
     fn disc_path_is_as_exact_as_the_ellipse_path(
         d in disc(), angle in -PI..=PI, picks in picks(), shift in [-20i32..=20, -20i32..=20],
     ) {
@@ -455,4 +452,44 @@ fn a_body_inside_one_cell_covers_its_own_area() {
         let g = disc_cell_fraction(Vector::from(c), a, 0.0, 0.0);
         assert!((g - PI * a * a).abs() <= cell_roundoff(1.0), "{g}");
     }
+}
+
+/// The case that exposed the disc formula's ill-conditioning near tangency (r = 16.26: the horizontal edges of
+/// the cells at the disc's height cross the circle next to its leftmost and rightmost points): every cell of the
+/// bounding box agrees with the ellipse path (sectors by atan2) within roundoff, in f64 and in f32. Before the fix
+/// one cell was off by 2.6e-11 in f64 (≈ 200 × the bound) and 5.7e-3 in f32.
+#[test]
+fn disc_near_tangency_regression() {
+    let d = oracle::Ellipse {
+        centre: [6.5060620186448315, 2.4946140745030694],
+        a: 16.261575424519968,
+        b: 16.261575424519968,
+        angle: 0.0,
+    };
+    let tol = 2.0 * cell_roundoff(d.a);
+    let tol32 = tol * (f32::EPSILON as f64 / f64::EPSILON);
+    let (c32, r32) = ([d.centre[0] as f32, d.centre[1] as f32], d.a as f32);
+    let mut cells = 0;
+    for (x, y) in nodes_near(&d) {
+        let a = disc_cell_fraction(Vector::from(d.centre), d.a, x, y);
+        let b = kernel_ellipse_fraction(&d, x, y);
+        assert!(
+            (a - b).abs() <= tol,
+            "cell ({x}, {y}): disc {a} vs ellipse {b}"
+        );
+        let f = disc_cell_fraction(Vector::from(c32), r32, x as f32, y as f32) as f64;
+        let g = disc_cell_fraction(
+            Vector::from([c32[0] as f64, c32[1] as f64]),
+            r32 as f64,
+            x,
+            y,
+        );
+        assert!(
+            (f - g).abs() <= tol32,
+            "f32 cell ({x}, {y}): f32 {f} vs f64 {g}"
+        );
+        cells += usize::from(a > 0.0 && a < 1.0);
+    }
+    // The circle crosses about 4 · 2r ≈ 130 cells; a scan that saw none would prove nothing.
+    assert!(cells > 100, "only {cells} boundary cells");
 }

@@ -23,14 +23,13 @@ proptest! {
     #![proptest_config(config(256))]
 
     #[test]
-    fn f64_portable_functions_match_the_platform(x in -20.0f64..20.0, y in -20.0f64..20.0, u in -1.0f64..=1.0, p in 1e-6f64..1e6) {
+    fn f64_portable_functions_match_the_platform(x in -20.0f64..20.0, y in -20.0f64..20.0, p in 1e-6f64..1e6) {
         let e = f64::EPSILON;
         prop_assert!(close(x.portable_sin(), x.sin(), e, 4.0, 1.0));
         prop_assert!(close(x.portable_cos(), x.cos(), e, 4.0, 1.0));
         let (s, c) = x.portable_sin_cos();
         prop_assert_eq!((s.to_bits(), c.to_bits()), (x.portable_sin().to_bits(), x.portable_cos().to_bits()));
         prop_assert!(close(y.portable_atan2(x), y.atan2(x), e, 4.0, 1e-300));
-        prop_assert!(close(u.portable_asin(), u.asin(), e, 4.0, 1e-300));
         prop_assert!(close(x.portable_hypot(y), x.hypot(y), e, 4.0, 1e-300));
         prop_assert!(close(p.portable_ln(), p.ln(), e, 4.0, 1.0));
         prop_assert_eq!(<f64 as Real>::lit(x).to_bits(), x.to_bits());
@@ -38,15 +37,14 @@ proptest! {
     }
 
     #[test]
-    fn f32_portable_functions_match_f64(x in -20.0f32..20.0, y in -20.0f32..20.0, u in -1.0f32..=1.0, p in 1e-6f32..1e6) {
+    fn f32_portable_functions_match_f64(x in -20.0f32..20.0, y in -20.0f32..20.0, p in 1e-6f32..1e6) {
         let e = f32::EPSILON as f64;
-        let (xd, yd, ud, pd) = (x as f64, y as f64, u as f64, p as f64);
+        let (xd, yd, pd) = (x as f64, y as f64, p as f64);
         prop_assert!(close(x.portable_sin() as f64, xd.sin(), e, 4.0, 1.0));
         prop_assert!(close(x.portable_cos() as f64, xd.cos(), e, 4.0, 1.0));
         let (s, c) = x.portable_sin_cos();
         prop_assert_eq!((s.to_bits(), c.to_bits()), (x.portable_sin().to_bits(), x.portable_cos().to_bits()));
         prop_assert!(close(y.portable_atan2(x) as f64, yd.atan2(xd), e, 4.0, 1e-30));
-        prop_assert!(close(u.portable_asin() as f64, ud.asin(), e, 4.0, 1e-30));
         prop_assert!(close(x.portable_hypot(y) as f64, xd.hypot(yd), e, 4.0, 1e-30));
         prop_assert!(close(p.portable_ln() as f64, pd.ln(), e, 4.0, 1.0));
         // lit rounds to nearest; to_f64_exact widens exactly.
