@@ -8,8 +8,12 @@
 //! * `poiseuille_body_force`: the periodic channel of `scenes/poiseuille_body_force.toml` (H = 0.176 cm, but
 //!   L = H, so ny × ny nodes) but at the τ = 0.875 of table 4.1 rather than the "magic" τ = ½ + √(3/16), where half-way
 //!   bounce-back is exact, so that the error shows the method's second-order convergence; same error measure.
-//! * `cylinder_array`: the periodic square array of discs at solid fraction c = 0.4, τ = 0.8, Ω₁ PSM
-//!   ([`ArrayCase::stokes`]), cell side `l` nodes; error = |F/(μU) / Sangani–Acrivos − 1|.
+//! * `cylinder_array`: the periodic square array of discs at solid fraction c = 0.4, cell side `l` nodes;
+//!   error = |F/(μU) / Sangani–Acrivos − 1|. With the τ axis (issue 11): every resolution is run with each
+//!   [`ArrayMethod`] — the dissertation's Ω₁ with BGK and the τ-independent ΩΛ with TRT (Λ = 3/16) — at each τ
+//!   of [`StudyPlan::array_variants`] ([`ArrayCase::stokes`], drive for U = 1e-3 whatever τ). A larger τ is a larger
+//!   viscosity in lattice units: the flow settles in fewer steps (∝ 1/ν), which is cheaper, and with ΩΛ costs no
+//!   accuracy; with Ω₁/BGK the drag moves with τ (README, "Results that do not depend on τ").
 //!
 //! Resolution changes h at fixed τ (so Δt ∝ h², diffusive scaling) and fixed physical size; the drive is
 //! scaled to hold the lattice centreline speed at 0.01 (Mach 0.017), so the Stokes-flow relative error is
@@ -34,6 +38,7 @@ use crate::output::plot::{loglog_png, LogLogPlot, Marker, Series};
 use crate::output::write_atomic;
 use crate::run::Case;
 use crate::scene::Precision;
+use lbdem_kernels::fluid::collide::{Collision, SolidOperator, Trt};
 
 /// The problems of the study.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
@@ -82,8 +87,40 @@ pub const ARRAY_SOLID_FRACTION: f64 = 0.4;
 pub const ARRAY_TAU: f64 = 0.8;
 /// τ of both channel problems (table 4.1).
 pub const CHANNEL_TAU: f64 = 0.875;
+/// Method column of the channel rows (BGK, no solids).
+pub const CHANNEL_METHOD: &str = "bgk";
 /// Lattice centreline speed the channel drives are scaled to.
 pub const CHANNEL_LATTICE_SPEED: f64 = 0.01;
+/// The fluid collision and solid operator of a cylinder-array run.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ArrayMethod {
+    /// BGK with Ω₁ (non-equilibrium bounce-back, Noble–Torczynski weighting): the dissertation's method.
+    BgkOmega1,
+    /// TRT (Λ = 3/16) with ΩΛ (B = ε): the τ-independent combination, the kind's default.
+    TrtLambda,
+}
+
+impl ArrayMethod {
+    /// Name used in the CSV and tables.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::BgkOmega1 => "bgk_omega1",
+            Self::TrtLambda => "trt_lambda",
+        }
+    }
+
+    /// The array case at cell side `l` and relaxation time `tau` with this method.
+    pub fn case(self, l: usize, tau: f64) -> ArrayCase {
+        let mut case = ArrayCase::stokes(l, ARRAY_SOLID_FRACTION, tau);
+        if self == Self::TrtLambda {
+            case.collision = Collision::Trt(Trt::default());
+            case.solid_operator = SolidOperator::LambdaConsistent;
+        }
+        case
+    }
+}
+
 /// Error budgets the recommendations are given for.
 pub const BUDGETS: [f64; 3] = [0.1, 0.01, 0.001];
 
@@ -92,11 +129,14 @@ pub const BUDGETS: [f64; 3] = [0.1, 0.01, 0.001];
 pub struct StudyPlan {
     /// (problem, resolutions) in run order.
     pub ladders: Vec<(Problem, Vec<usize>)>,
+    /// The (τ, method) variants the cylinder array's ladder is run with, in run order.
+    pub array_variants: Vec<(f64, ArrayMethod)>,
 }
 
 impl StudyPlan {
-    /// The full study: 5–8 minutes in release mode with one thread on the shared 2-core development machine
-    /// (the l = 160 array and the 81-node body-force channel are two thirds of it).
+    /// The full study: the channels and the array at τ = 0.8, 1.4 and 2 with both methods; about 20 minutes in
+    /// release mode with one thread on the shared 2-core development machine (the l = 160 arrays at τ = 0.8
+    /// are half of it).
     pub fn full() -> Self {
         Self {
             ladders: vec![
@@ -104,6 +144,10 @@ impl StudyPlan {
                 (Problem::PoiseuilleBodyForce, vec![5, 11, 21, 41, 81]),
                 (Problem::CylinderArray, vec![10, 20, 40, 80, 160]),
             ],
+            array_variants: [ARRAY_TAU, 1.4, 2.0]
+                .into_iter()
+                .flat_map(|t| [(t, ArrayMethod::BgkOmega1), (t, ArrayMethod::TrtLambda)])
+                .collect(),
         }
     }
 
@@ -115,6 +159,24 @@ impl StudyPlan {
                 (Problem::PoiseuilleBodyForce, vec![5, 9, 17]),
                 (Problem::CylinderArray, vec![10, 20]),
             ],
+            // The earlier study's array (τ = 0.8, Ω₁ with BGK) and the default one at τ = 2.
+            array_variants: vec![
+                (ARRAY_TAU, ArrayMethod::BgkOmega1),
+                (2.0, ArrayMethod::TrtLambda),
+            ],
+        }
+    }
+
+    /// The (τ, method) variants of `problem`: `array_variants` for the array, the one BGK variant at
+    /// [`CHANNEL_TAU`] for the channels.
+    pub fn variants(&self, problem: Problem) -> Vec<(f64, &'static str)> {
+        match problem {
+            Problem::CylinderArray => self
+                .array_variants
+                .iter()
+                .map(|&(t, m)| (t, m.name()))
+                .collect(),
+            _ => vec![(CHANNEL_TAU, CHANNEL_METHOD)],
         }
     }
 }
@@ -128,6 +190,10 @@ pub struct StudyRow {
     pub precision: &'static str,
     /// Nodes across the channel, or the cell side of the array.
     pub resolution: usize,
+    /// Relaxation time τ.
+    pub tau: f64,
+    /// Collision and solid operator ([`ArrayMethod::name`], or "bgk" for the channels).
+    pub method: &'static str,
     /// Lattice nodes.
     pub nodes: usize,
     /// Steps run.
@@ -237,6 +303,8 @@ fn run_channel_case<T: Real>(problem: Problem, ny: usize, exec: &Exec) -> Result
         problem,
         precision: T::NAME,
         resolution: ny,
+        tau: CHANNEL_TAU,
+        method: CHANNEL_METHOD,
         nodes: setup.nx * setup.ny,
         steps: out.steps,
         wall_seconds: out.wall_seconds,
@@ -247,7 +315,7 @@ fn run_channel_case<T: Real>(problem: Problem, ny: usize, exec: &Exec) -> Result
     })
 }
 
-fn array_row<T: Real>(case: &ArrayCase, exec: &Exec) -> Result<StudyRow> {
+fn array_row<T: Real>(case: &ArrayCase, method: ArrayMethod, exec: &Exec) -> Result<StudyRow> {
     let r = solve_array_with::<T>(case, exec)?;
     let err = r.drag_error.ok_or_else(|| {
         LbdemError::field(
@@ -262,6 +330,8 @@ fn array_row<T: Real>(case: &ArrayCase, exec: &Exec) -> Result<StudyRow> {
         problem: Problem::CylinderArray,
         precision: T::NAME,
         resolution: case.cell,
+        tau: case.tau,
+        method: method.name(),
         nodes,
         steps: r.steps,
         wall_seconds: r.wall_seconds,
@@ -272,15 +342,16 @@ fn array_row<T: Real>(case: &ArrayCase, exec: &Exec) -> Result<StudyRow> {
     })
 }
 
-/// Run the cylinder array at cell side `l`: f64 to its steady criterion, then f32 for exactly as many steps.
-fn run_array_pair(l: usize, exec: &Exec) -> Result<[StudyRow; 2]> {
-    let case = ArrayCase::stokes(l, ARRAY_SOLID_FRACTION, ARRAY_TAU);
-    let r64 = array_row::<f64>(&case, exec)?;
+/// Run the cylinder array at cell side `l`, relaxation time `tau`, with `method`: f64 to its steady criterion,
+/// then f32 for exactly as many steps.
+fn run_array_pair(l: usize, tau: f64, method: ArrayMethod, exec: &Exec) -> Result<[StudyRow; 2]> {
+    let case = method.case(l, tau);
+    let r64 = array_row::<f64>(&case, method, exec)?;
     let mut fixed = case.clone();
     fixed.max_steps = r64.steps;
     // A zero tolerance is never met: the f32 run takes exactly max_steps (a multiple of the check interval).
     fixed.steady_tolerance = 0.0;
-    let r32 = array_row::<f32>(&fixed, exec)?;
+    let r32 = array_row::<f32>(&fixed, method, exec)?;
     Ok([r32, r64])
 }
 
@@ -292,17 +363,27 @@ pub fn run_study(
 ) -> Result<Vec<StudyRow>> {
     let mut rows = Vec::new();
     for (problem, ladder) in &plan.ladders {
-        for &n in ladder {
-            let pair = match problem {
-                Problem::CylinderArray => run_array_pair(n, exec)?,
-                p => [
-                    run_channel_case::<f32>(*p, n, exec)?,
-                    run_channel_case::<f64>(*p, n, exec)?,
-                ],
-            };
-            for r in pair {
-                progress(&r);
-                rows.push(r);
+        match problem {
+            Problem::CylinderArray => {
+                for &(tau, method) in &plan.array_variants {
+                    for &n in ladder {
+                        for r in run_array_pair(n, tau, method, exec)? {
+                            progress(&r);
+                            rows.push(r);
+                        }
+                    }
+                }
+            }
+            p => {
+                for &n in ladder {
+                    for r in [
+                        run_channel_case::<f32>(*p, n, exec)?,
+                        run_channel_case::<f64>(*p, n, exec)?,
+                    ] {
+                        progress(&r);
+                        rows.push(r);
+                    }
+                }
             }
         }
     }
@@ -312,15 +393,17 @@ pub fn run_study(
 /// The CSV of the study (one row per run).
 pub fn csv(rows: &[StudyRow]) -> String {
     let mut s = String::from(
-        "problem,precision,resolution,nodes,steps,wall_seconds,mlups,relative_error,signed_error,threads\n",
+        "problem,precision,resolution,tau,method,nodes,steps,wall_seconds,mlups,relative_error,signed_error,threads\n",
     );
     for r in rows {
         let _ = writeln!(
             s,
-            "{},{},{},{},{},{:.6e},{:.4},{:.6e},{:.6e},{}",
+            "{},{},{},{},{},{},{},{:.6e},{:.4},{:.6e},{:.6e},{}",
             r.problem.name(),
             r.precision,
             r.resolution,
+            r.tau,
+            r.method,
             r.nodes,
             r.steps,
             r.wall_seconds,
@@ -344,16 +427,18 @@ pub const TIMING_NOISE: f64 = 1.2;
 /// Markdown table of all runs.
 pub fn markdown_table(rows: &[StudyRow]) -> String {
     let mut s = String::from(
-        "| problem | precision | resolution | nodes | steps | wall [s] | MLUPS | relative error |\n\
-         |---|---|---:|---:|---:|---:|---:|---:|\n",
+        "| problem | precision | resolution | τ | method | nodes | steps | wall [s] | MLUPS | relative error |\n\
+         |---|---|---:|---:|---|---:|---:|---:|---:|---:|\n",
     );
     for r in rows {
         let _ = writeln!(
             s,
-            "| {} | {} | {} | {} | {} | {:.3} | {:.1} | {} |",
+            "| {} | {} | {} | {} | {} | {} | {} | {:.3} | {:.1} | {} |",
             r.problem.name(),
             r.precision,
             r.resolution,
+            r.tau,
+            r.method,
             r.nodes,
             r.steps,
             r.wall_seconds,
@@ -405,6 +490,8 @@ pub fn recommendations(rows: &[StudyRow]) -> String {
                     let twin = rows.iter().find(|o| {
                         o.problem == p
                             && o.resolution == r.resolution
+                            && o.tau == r.tau
+                            && o.method == r.method
                             && o.precision != r.precision
                             && o.relative_error <= b
                             && o.wall_seconds <= TIMING_NOISE * r.wall_seconds
@@ -415,10 +502,12 @@ pub fn recommendations(rows: &[StudyRow]) -> String {
                     };
                     let _ = writeln!(
                         s,
-                        "  - {} budget: {} at resolution {} ({} steps, {:.3} s, error {})",
+                        "  - {} budget: {} at resolution {}, τ = {}, {} ({} steps, {:.3} s, error {})",
                         budget_label(b),
                         precision,
                         r.resolution,
+                        r.tau,
+                        r.method,
                         r.steps,
                         r.wall_seconds,
                         percent(r.relative_error)
@@ -434,9 +523,11 @@ pub fn recommendations(rows: &[StudyRow]) -> String {
                         "  - {} budget: not reached by any run (best {}), refine further",
                         budget_label(b),
                         best.map(|r| format!(
-                            "{} at {}: {}",
+                            "{} at {}, τ = {}, {}: {}",
                             r.precision,
                             r.resolution,
+                            r.tau,
+                            r.method,
                             percent(r.relative_error)
                         ))
                         .unwrap_or_else(|| "none".into())
@@ -460,14 +551,19 @@ pub fn f32_floors(rows: &[StudyRow]) -> String {
         seen.push(r.problem);
         let p = r.problem;
         let mut pairs: Vec<(usize, f64, f64)> = Vec::new();
+        // The f32 floor is a property of the precision, so only the variant run first (the channels' one; the
+        // array's first τ and method: τ = 0.8, Ω₁ with BGK, as before the τ axis) is compared.
+        let first = (r.tau, r.method);
         for a in rows
             .iter()
-            .filter(|x| x.problem == p && x.precision == "f32")
+            .filter(|x| x.problem == p && x.precision == "f32" && (x.tau, x.method) == first)
         {
-            if let Some(b) = rows
-                .iter()
-                .find(|x| x.problem == p && x.precision == "f64" && x.resolution == a.resolution)
-            {
+            if let Some(b) = rows.iter().find(|x| {
+                x.problem == p
+                    && x.precision == "f64"
+                    && x.resolution == a.resolution
+                    && (x.tau, x.method) == first
+            }) {
                 pairs.push((a.resolution, a.relative_error, b.relative_error));
             }
         }
@@ -509,26 +605,39 @@ pub fn plot(rows: &[StudyRow], path: &Path) -> Result<()> {
         (214, 39, 40),
         (44, 160, 44),
         (148, 103, 189),
+        (255, 127, 14),
+        (140, 86, 75),
+        (227, 119, 194),
+        (127, 127, 127),
+        (188, 189, 34),
+        (23, 190, 207),
     ];
     let mut series = Vec::new();
-    let mut problems: Vec<Problem> = Vec::new();
+    let mut variants: Vec<(Problem, f64, &'static str)> = Vec::new();
     for r in rows {
-        if !problems.contains(&r.problem) {
-            problems.push(r.problem);
+        if !variants.contains(&(r.problem, r.tau, r.method)) {
+            variants.push((r.problem, r.tau, r.method));
         }
     }
-    for (i, p) in problems.iter().enumerate() {
+    for (i, &(p, tau, method)) in variants.iter().enumerate() {
         for precision in ["f64", "f32"] {
             let points: Vec<(f64, f64, String)> = rows
                 .iter()
-                .filter(|r| r.problem == *p && r.precision == precision)
+                .filter(|r| {
+                    r.problem == p && r.precision == precision && r.tau == tau && r.method == method
+                })
                 .map(|r| (r.wall_seconds, r.relative_error, r.resolution.to_string()))
                 .collect();
             if points.is_empty() {
                 continue;
             }
+            let name = if p == Problem::CylinderArray {
+                format!("{} τ={tau} {method} {precision}", p.name())
+            } else {
+                format!("{} {precision}", p.name())
+            };
             series.push(Series {
-                name: format!("{} {precision}", p.name()),
+                name,
                 color: colors[i % colors.len()],
                 dashed: precision == "f32",
                 marker: if precision == "f32" {
@@ -583,10 +692,12 @@ fn speed_vs_error_in_pool(out: &Path, quick: bool, verbose: bool, exec: &Exec) -
     let rows = run_study(&plan, exec, |r| {
         if verbose {
             eprintln!(
-                "  {:<22} {} {:>3}: {:>8} steps {:>8.3} s {:>7.1} MLUPS  error {:.3e}",
+                "  {:<22} {} {:>3} τ {:<4} {:<10}: {:>8} steps {:>8.3} s {:>7.1} MLUPS  error {:.3e}",
                 r.problem.name(),
                 r.precision,
                 r.resolution,
+                r.tau,
+                r.method,
                 r.steps,
                 r.wall_seconds,
                 r.mlups,

@@ -241,3 +241,70 @@ fn lambda_consistent_with_light_free_grains_at_high_tau_is_refused_and_near_the_
     // Rock grains (2.65) at τ = 2: no warning.
     assert!(!warned(&warnings(&with(&tv, "tau", "2.0"))));
 }
+
+#[test]
+fn free_grain_kinds_default_to_trt_and_lambda_consistent_where_stable_and_fall_back_with_a_warning()
+{
+    use lbdem::kinds::terminal_velocity::{self, TerminalVelocity};
+    let read = |text: &str| Case::<TerminalVelocity>::read(text, "t.toml").unwrap();
+    let choice = |case: &Case<TerminalVelocity>| {
+        terminal_velocity::fluid_choice(
+            &case.scene,
+            case.setup.units.tau,
+            &mut lbdem::units::Warnings::default(),
+        )
+    };
+    // The bundled scene (rock grain, τ = 0.8) names neither key: TRT + ΩΛ, no warning.
+    let tv = scene("terminal_velocity.toml");
+    let case = read(&tv);
+    assert_eq!(
+        choice(&case),
+        (
+            lbdem::units::CollisionName::Trt,
+            SolidOperator::LambdaConsistent
+        )
+    );
+    assert!(case
+        .setup
+        .warnings
+        .iter()
+        .all(|w| !w.contains("solid_operator not given")));
+    // A neutrally buoyant grain at τ = 0.8, where ΩΛ diverged: not refused (the scene did not ask for ΩΛ) but
+    // Ω₁ₗ with BGK, and a warning naming what to change.
+    let light = read(&with(&with(&tv, "grain_density", "1.0"), "tau", "0.8"));
+    assert_eq!(
+        choice(&light),
+        (
+            lbdem::units::CollisionName::Bgk,
+            SolidOperator::LinearizedNonEquilibriumBounceBack
+        )
+    );
+    assert!(
+        light
+            .setup
+            .warnings
+            .iter()
+            .any(|w| w.contains("solid_operator not given") && w.contains("fluid.tau to 0.55")),
+        "{:?}",
+        light.setup.warnings
+    );
+    // Naming ΩΛ there is still refused (the stability map).
+    refused_by_both(
+        &adding(
+            &with(&with(&tv, "grain_density", "1.0"), "tau", "0.8"),
+            "duration = 0.605       # s = 5000 steps (12 e-folding times of the slowest viscous mode l^2/(4 pi^2 nu))",
+            "solid_operator = \"lambda_consistent\"",
+        ),
+        "terminal_velocity.solid_operator",
+    );
+    // The fracture scenes (rock grains) default to TRT + ΩΛ as well.
+    let fracture = scene("fracture/quick/base.toml");
+    let case = Case::<lbdem::kinds::fracture::FractureTest>::read(&fracture, "f.toml").unwrap();
+    let f = case.scene.fluid.as_ref().unwrap();
+    let fs = case
+        .scene
+        .fluid_setup(f, &mut lbdem::units::Warnings::default())
+        .unwrap();
+    assert_eq!(fs.solid_operator, SolidOperator::LambdaConsistent);
+    assert_eq!(fs.collision_default, lbdem::units::CollisionName::Trt);
+}

@@ -13,10 +13,12 @@ fn scratch(name: &str) -> PathBuf {
     dir
 }
 
-const COLUMNS: [&str; 10] = [
+const COLUMNS: [&str; 12] = [
     "problem",
     "precision",
     "resolution",
+    "tau",
+    "method",
     "nodes",
     "steps",
     "wall_seconds",
@@ -55,44 +57,67 @@ fn quick_study_writes_csv_and_png_and_f64_errors_fall_with_resolution() {
     assert_eq!(header, COLUMNS);
     let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
     let plan = StudyPlan::quick();
-    let expected: usize = plan.ladders.iter().map(|(_, l)| 2 * l.len()).sum();
+    let expected: usize = plan
+        .ladders
+        .iter()
+        .map(|(p, l)| 2 * l.len() * plan.variants(*p).len())
+        .sum();
     assert_eq!(rows.len(), expected, "rows: {rows:?}");
-    let mut errors: BTreeMap<(String, String), Vec<(usize, f64)>> = BTreeMap::new();
+    type Variant = (String, String, String, String);
+    let mut errors: BTreeMap<Variant, Vec<(usize, f64)>> = BTreeMap::new();
     for r in &rows {
         assert_eq!(r.len(), COLUMNS.len(), "row {r:?}");
         assert!(r[1] == "f32" || r[1] == "f64", "precision in {r:?}");
         let resolution: usize = r[2].parse().expect("resolution is an integer");
-        let steps: u64 = r[4].parse().expect("steps is an integer");
+        let tau: f64 = r[3].parse().expect("tau is a number");
+        assert!(tau > 0.5, "{r:?}");
+        let steps: u64 = r[6].parse().expect("steps is an integer");
         assert!(steps > 0, "{r:?}");
-        for c in [5, 6, 7] {
+        for c in [7, 8, 9] {
             let v: f64 = r[c].parse().expect("numeric column");
             assert!(v.is_finite() && v >= 0.0, "column {} in {r:?}", COLUMNS[c]);
         }
-        let err: f64 = r[7].parse().unwrap();
+        let err: f64 = r[9].parse().unwrap();
         // Every quick case is resolved well enough to be within 30 % (the coarsest array, l = 10 with 2.9
         // nodes across the gap, is the worst: docs/references.md §1.5 puts ≈ 3 gap nodes in the tens-of-percent class).
         assert!(err > 0.0 && err < 0.3, "error out of range in {r:?}");
         errors
-            .entry((r[0].to_string(), r[1].to_string()))
+            .entry((
+                r[0].to_string(),
+                r[3].to_string(),
+                r[4].to_string(),
+                r[1].to_string(),
+            ))
             .or_default()
             .push((resolution, err));
     }
     for (problem, ladder) in &plan.ladders {
-        for precision in ["f32", "f64"] {
-            let got = &errors[&(problem.name().to_string(), precision.to_string())];
-            let resolutions: Vec<usize> = got.iter().map(|x| x.0).collect();
-            assert_eq!(&resolutions, ladder, "{} {precision}", problem.name());
-        }
-        // f64: the error is discretisation error (second order for the channels, ≈ first order for the
-        // staircase-free PSM array), so every refinement by ≥ 1.8× in resolution must cut it by at least 1.5×.
-        let f64s = &errors[&(problem.name().to_string(), "f64".to_string())];
-        for w in f64s.windows(2) {
-            assert!(
-                w[1].1 < w[0].1 / 1.5,
-                "{}: f64 error does not fall with resolution: {:?}",
-                problem.name(),
-                f64s
-            );
+        for (tau, method) in plan.variants(*problem) {
+            let key = |precision: &str| {
+                (
+                    problem.name().to_string(),
+                    tau.to_string(),
+                    method.to_string(),
+                    precision.to_string(),
+                )
+            };
+            for precision in ["f32", "f64"] {
+                let got = &errors[&key(precision)];
+                let resolutions: Vec<usize> = got.iter().map(|x| x.0).collect();
+                assert_eq!(&resolutions, ladder, "{} {precision}", problem.name());
+            }
+            // f64: the error is discretisation error (second order for the channels, ≈ first order for the
+            // staircase-free PSM array), so every refinement by ≥ 1.8× in resolution must cut it by at least
+            // 1.5×.
+            let f64s = &errors[&key("f64")];
+            for w in f64s.windows(2) {
+                assert!(
+                    w[1].1 < w[0].1 / 1.5,
+                    "{} τ = {tau} {method}: f64 error does not fall with resolution: {:?}",
+                    problem.name(),
+                    f64s
+                );
+            }
         }
     }
 

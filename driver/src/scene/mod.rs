@@ -350,6 +350,78 @@ pub const LAMBDA_FREE_GRAIN_STABILITY: [(f64, f64, f64); 3] = [
     (2.0, 2.0, f64::INFINITY),
 ];
 
+/// The fluid collision and solid operator of a scene with free grains that names neither, at relaxation time
+/// `tau`, for grains `density_ratio` times as dense as the fluid (the lightest grain).
+///
+/// The τ-independent combination, TRT + ΩΛ, where ΩΛ was measured stable with a free grain of that density
+/// ([`LAMBDA_FREE_GRAIN_STABILITY`]: τ at or below the row's last stable τ, grains at least as dense as the
+/// fluid): its drag does not move with τ (free disc +0.42…+0.45 % over τ = 0.55…2 where Ω₁ with BGK moves
+/// from +0.49 to −10.4 %) and the fracture scenes' intact permeability is the same at every τ (README,
+/// "Results that do not depend on τ"). Elsewhere the best operator that is stable there, Ω₁ₗ with BGK (the
+/// dissertation's method; drag moves with τ), and `warnings` says so and what to change to get TRT + ΩΛ.
+/// A scene that names `solid_operator` or `collision` keeps its choice for that key.
+pub fn free_grain_defaults(
+    tau: f64,
+    density_ratio: f64,
+    warnings: &mut crate::units::Warnings,
+) -> (
+    crate::units::CollisionName,
+    lbdem_kernels::fluid::collide::SolidOperator,
+) {
+    use crate::units::CollisionName;
+    use lbdem_kernels::fluid::collide::SolidOperator as Op;
+    let stable = lambda_free_grain_row(density_ratio).1;
+    if density_ratio >= 1.0 && tau <= stable {
+        (CollisionName::Trt, Op::LambdaConsistent)
+    } else {
+        warnings.push(format!(
+            "solid_operator not given: the default, \"lambda_consistent\" with collision = \"trt\" (results \
+             independent of tau), is outside the region measured stable for free grains {density_ratio:.3} times \
+             as dense as the fluid at tau = {tau:.4}; using \"linearized_non_equilibrium_bounce_back\" \
+             (Omega_1l) with collision = \"bgk\" instead, whose drag and permeability move with tau. For \
+             results independent of tau lower fluid.tau to {stable} or below{}",
+            if density_ratio < 1.0 {
+                " and use grains at least as dense as the fluid"
+            } else {
+                ""
+            }
+        ));
+        (CollisionName::Bgk, Op::LinearizedNonEquilibriumBounceBack)
+    }
+}
+
+/// The default fluid collision and the solid operator of a scene with free grains whose solid operator key
+/// holds `given`: with an operator given, that operator and the collision that goes with it (TRT for ΩΛ, whose
+/// τ-independence needs it; BGK for the others, the dissertation's method); without, [`free_grain_defaults`].
+/// `[fluid] collision`, where given, overrides the collision returned here.
+pub fn free_grain_choice(
+    given: Option<lbdem_kernels::fluid::collide::SolidOperator>,
+    tau: f64,
+    density_ratio: f64,
+    warnings: &mut crate::units::Warnings,
+) -> (
+    crate::units::CollisionName,
+    lbdem_kernels::fluid::collide::SolidOperator,
+) {
+    use crate::units::CollisionName;
+    use lbdem_kernels::fluid::collide::SolidOperator as Op;
+    match given {
+        Some(Op::LambdaConsistent) => (CollisionName::Trt, Op::LambdaConsistent),
+        Some(op) => (CollisionName::Bgk, op),
+        None => free_grain_defaults(tau, density_ratio, warnings),
+    }
+}
+
+/// The row of [`LAMBDA_FREE_GRAIN_STABILITY`] for grains `density_ratio` times as dense as the fluid.
+fn lambda_free_grain_row(density_ratio: f64) -> (f64, f64, f64) {
+    LAMBDA_FREE_GRAIN_STABILITY
+        .iter()
+        .rev()
+        .find(|r| density_ratio >= r.0)
+        .copied()
+        .unwrap_or(LAMBDA_FREE_GRAIN_STABILITY[0])
+}
+
 /// Check the PSM solid operator `op` (read from `field`) of a scene whose grains move freely under the fluid's
 /// force, at relaxation time `tau`, for grains `density_ratio` times as dense as the fluid (the lightest grain).
 ///
@@ -388,12 +460,7 @@ pub fn check_free_grain_operator(
             fix,
         )),
         Op::LambdaConsistent => {
-            let (_, stable, diverged) = LAMBDA_FREE_GRAIN_STABILITY
-                .iter()
-                .rev()
-                .find(|r| density_ratio >= r.0)
-                .copied()
-                .unwrap_or(LAMBDA_FREE_GRAIN_STABILITY[0]);
+            let (_, stable, diverged) = lambda_free_grain_row(density_ratio);
             let measured = "measured with a free disc (README, moving solids): grain/fluid density 1 stable at \
                             tau = 0.55 and diverged from 0.8; 1.25-1.5 stable to 1.2 and diverged at 2; 2 and \
                             above stable to 2";

@@ -27,7 +27,7 @@ use std::path::Path;
 use lbdem_kernels::dem::assembly::ContactModel;
 use lbdem_kernels::dem::shape::Particle;
 use lbdem_kernels::fluid::boundary::Boundaries;
-use lbdem_kernels::fluid::collide::Weighting;
+use lbdem_kernels::fluid::collide::{Collision, SolidOperator, Trt};
 use lbdem_kernels::fluid::step::FluidParams;
 use serde::{Deserialize, Serialize};
 use serde_json::json;
@@ -43,8 +43,9 @@ use crate::output::snapshots::{write_coupled, SnapshotClock};
 use crate::output::vtk::{LatticeFrame, Stamp, Units};
 use crate::output::{csv, write_atomic};
 use crate::run::{Case, CheckpointInterval, Kind, OutputStage, Persist};
+use crate::scene::free_grain_defaults;
 use crate::scene::{CheckpointSection, SnapshotSection, UnitSystem};
-use crate::units::TAU_REFUSE_HIGH;
+use crate::units::{CollisionName, Warnings, TAU_REFUSE_HIGH};
 
 /// `[scene]` of the demo (only `kind` and an optional name).
 #[derive(Clone, Debug, Deserialize, Serialize)]
@@ -65,7 +66,7 @@ pub struct DemoSection {
     pub nx: usize,
     /// Lattice nodes along y.
     pub ny: usize,
-    /// BGK relaxation time.
+    /// Relaxation time (TRT + ΩΛ up to τ = 2, BGK + Ω₁ₗ above: [`DemoScene::fluid_choice`]).
     pub tau: f64,
     /// Number of discs (1–4, on a 2 × 2 grid).
     pub discs: usize,
@@ -107,11 +108,27 @@ impl crate::run::SceneFile for DemoScene {
     }
 }
 
+/// Density of the demo's discs relative to the fluid.
+const DISC_DENSITY: f64 = 2.0;
+
 impl DemoScene {
+    /// The fluid collision and solid operator ([`free_grain_defaults`] for discs twice as dense as the fluid):
+    /// TRT + ΩΛ, whose drag does not move with τ, at τ ≤ 2 (measured stable there with such grains), Ω₁ₗ with
+    /// BGK above.
+    pub fn fluid_choice(&self) -> (Collision<f64>, SolidOperator) {
+        let (name, op) = free_grain_defaults(self.demo.tau, DISC_DENSITY, &mut Warnings::default());
+        let collision = match name {
+            CollisionName::Trt => Collision::Trt(Trt::default()),
+            CollisionName::Bgk => Collision::Bgk,
+        };
+        (collision, op)
+    }
+
     /// The initial coupled world.
     pub fn build_world(&self) -> Result<CoupledWorld> {
         let d = &self.demo;
-        let fluid = FluidLattice::new(
+        let (collision, op) = self.fluid_choice();
+        let mut fluid = FluidLattice::new(
             d.nx,
             d.ny,
             Boundaries::periodic(),
@@ -120,6 +137,8 @@ impl DemoScene {
                 force: [0.0; 2],
             },
         )?;
+        fluid.set_collision(collision)?;
+        fluid.set_solid_operator(op);
         let (w, h) = (d.nx as f64, d.ny as f64);
         let spots = [
             [0.3 * w, 0.3 * h],
@@ -131,7 +150,8 @@ impl DemoScene {
             .iter()
             .enumerate()
             .map(|(k, &c)| {
-                let mut p = Particle::disc(lbdem_kernels::math::Vector::from(c), d.radius, 2.0);
+                let mut p =
+                    Particle::disc(lbdem_kernels::math::Vector::from(c), d.radius, DISC_DENSITY);
                 let sign = if k % 2 == 0 { 1.0 } else { -1.0 };
                 p.velocity = lbdem_kernels::math::vector(sign * d.speed, 0.5 * d.speed);
                 p.angular_velocity = sign * d.speed / d.radius;
@@ -147,14 +167,7 @@ impl DemoScene {
         };
         let mut dem = DemWorld::new(particles, model, 1.0)?;
         dem.local_damping = 0.0;
-        CoupledWorld::new(
-            fluid,
-            dem,
-            LatticeMap::identity(),
-            1.0,
-            Weighting::NobleTorczynski,
-            1,
-        )
+        CoupledWorld::new(fluid, dem, LatticeMap::identity(), 1.0, op.weighting(), 1)
     }
 }
 
