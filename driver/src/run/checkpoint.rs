@@ -55,8 +55,11 @@ pub const MAGIC: [u8; 8] = *b"LBDEMCKP";
 /// adds the lattice's side velocity profiles (issue 11) and puts the header under the checksum (in version 2 an
 /// edited step or kind tag went unnoticed); version-2 files are refused with the version named. Version 4 adds
 /// the fluid collision (TRT's magic parameter) to the cases of the cylinder-array, porous-flow and channel kinds
-/// (issue 11, `[fluid] collision`); version-3 files are refused with the version named.
-pub const FORMAT_VERSION: u32 = 4;
+/// (issue 11, `[fluid] collision`); version-3 files are refused with the version named. Version 5: the
+/// snapshot clocks of the kinds that gained VTK series (coupled_demo, terminal_velocity, consolidation,
+/// terzaghi; issue 16), one state type for the two sweep kinds (issue 12) and the free-grain default operators
+/// (issue 11) change those payloads; version-4 files are refused with the version named.
+pub const FORMAT_VERSION: u32 = 5;
 /// SHA-256 of a scene text (stored in the header, checked on resume).
 pub fn scene_hash(text: &str) -> [u8; 32] {
     Sha256::digest(text.as_bytes()).into()
