@@ -88,7 +88,12 @@ fn runs() -> &'static [(&'static str, PathBuf)] {
         );
         // The other kinds with grains: the tiny scenes of `every_kind.rs`, with their default snapshot interval
         // (a tenth of the run).
-        let demo = "[scene]\nkind = \"coupled_demo\"\n[demo]\nnx = 32\nny = 32\ntau = 0.8\ndiscs = 3\n\
+        // The demo at τ = 2.2, above the ΩΛ stability bound for its grains, so it runs BGK + Ω₁ₗ: there the file's
+        // velocity is (Σ f c + F/2)/ρ at every node and Σ ρu must equal series.csv's fluid momentum. Under ΩΛ (the
+        // default below τ = 2) the velocity at covered nodes is the one its collision uses, with the solids'
+        // friction (docs/outputs.md), so that identity does not hold there by design; the fracture run above
+        // covers the ΩΛ files.
+        let demo = "[scene]\nkind = \"coupled_demo\"\n[demo]\nnx = 32\nny = 32\ntau = 2.2\ndiscs = 3\n\
                     radius = 4.0\nspeed = 0.01\nsteps = 200\nrecord_interval = 10\n";
         let terminal = edit(
             &bundled("terminal_velocity.toml"),

@@ -131,7 +131,7 @@ fn empty_run_dir(dir: &Path) -> Result<()> {
         .map_err(err)?;
     let manifest = std::fs::read_to_string(dir.join(MANIFEST_FILE)).unwrap_or_default();
     let listed: std::collections::BTreeSet<&str> = manifest.lines().collect();
-    let foreign: Vec<String> = entries
+    let mut foreign: Vec<String> = entries
         .iter()
         .filter(|e| {
             let is_file = e.file_type().is_ok_and(|t| t.is_file());
@@ -140,6 +140,8 @@ fn empty_run_dir(dir: &Path) -> Result<()> {
         .map(|e| e.file_name().to_string_lossy().into_owned())
         .collect();
     if !foreign.is_empty() {
+        // Sorted, so that the message names the same files whatever order the directory lists them in.
+        foreign.sort();
         let mut files = foreign
             .iter()
             .take(5)

@@ -222,6 +222,18 @@ pub struct Stamp {
     pub units: Units,
 }
 
+impl Stamp {
+    /// The stamp of a snapshot at model time `time` of a scene named `name` (`lbdem KIND` when unnamed), with the
+    /// unit labels of `system`.
+    pub fn titled(time: f64, name: Option<&str>, kind: &str, system: UnitSystem) -> Self {
+        Stamp {
+            time,
+            title: name.map_or_else(|| format!("lbdem {kind}"), str::to_owned),
+            units: Units::of(system),
+        }
+    }
+}
+
 fn escape(s: &str) -> String {
     s.chars()
         .filter(|c| !c.is_control())

@@ -17,7 +17,7 @@ use crate::error::{positive, LbdemError, Result};
 use crate::input::limits::{self, Budget};
 use crate::observe::health::{dem_health, finite, fluid_health};
 use crate::output::snapshots::{write_coupled, SnapshotClock};
-use crate::output::vtk::{LatticeFrame, Stamp, Units};
+use crate::output::vtk::{LatticeFrame, Stamp};
 use crate::output::{csv, write_atomic};
 use crate::run::{run_in_memory, Case, Kind, OutputStage, Persist, RunOptions};
 use crate::scene::{CheckpointSection, SceneHeader, SnapshotSection, UnitsSetup};
@@ -232,16 +232,13 @@ impl ConsolidationState {
     /// The next VTK snapshot (grains, lattice with the pore pressure above the drained top).
     fn snapshot(&mut self, case: &Case<Consolidation>, dir: &Path, every: u64) -> Result<()> {
         let u = &case.setup.units;
-        let stamp = Stamp {
-            time: self.s as f64 * u.timestep,
-            title: case
-                .scene
-                .scene
-                .name
-                .clone()
-                .unwrap_or_else(|| "lbdem consolidation".into()),
-            units: Units::of(case.scene.scene.units),
-        };
+        let h = &case.scene.scene;
+        let stamp = Stamp::titled(
+            self.s as f64 * u.timestep,
+            h.name.as_deref(),
+            &h.kind,
+            h.units,
+        );
         let frame = LatticeFrame::of(u, self.world.map.origin, 1.0);
         write_coupled(
             dir,

@@ -36,7 +36,7 @@ use crate::error::{positive, LbdemError, Result};
 use crate::input::limits::{self, Budget};
 use crate::observe::health::{dem_health, fluid_health};
 use crate::output::snapshots::{write_coupled, SnapshotClock};
-use crate::output::vtk::{LatticeFrame, Scale, Stamp, Units};
+use crate::output::vtk::{LatticeFrame, Scale, Stamp};
 use crate::output::{csv, write_atomic};
 use crate::run::{run_in_memory, Case, Kind, OutputStage, Persist, RunOptions};
 use crate::scene::{
@@ -569,15 +569,16 @@ impl Kind for TerminalVelocity {
         let every = case.scene.output.every(u.timestep, state.steps);
         // The disc and the fluid are simulated in lattice units: the files are in the scene's units.
         let snapshot = |state: &mut TerminalState, dir: &Path, every: u64| {
+            let h = &case.scene.scene;
+            let stamp = Stamp::titled(
+                state.done as f64 * u.timestep,
+                h.name.as_deref(),
+                &h.kind,
+                h.units,
+            );
             let stamp = Stamp {
-                time: state.done as f64 * u.timestep,
-                title: case
-                    .scene
-                    .scene
-                    .name
-                    .clone()
-                    .unwrap_or_else(|| "lbdem terminal_velocity".into()),
-                units: Units::of(case.scene.scene.units).scaled(Scale::lattice(&u)),
+                units: stamp.units.scaled(Scale::lattice(&u)),
+                ..stamp
             };
             write_coupled(
                 dir,
