@@ -853,3 +853,33 @@ proptest! {
         prop_assert!((textbook_gap(&e1, &e2, theta) - kernel_max).abs() <= 1e-12);
     }
 }
+
+/// `ContactModel::law` hands every setting of the model to the pair's law: stiffnesses, friction, the no-tension
+/// switch either way, and the dashpot of restitution e for the pair's effective mass (a wall, infinite mass,
+/// leaves the grain's own mass).
+#[test]
+fn contact_model_law_carries_every_setting() {
+    use lbdem_kernels::dem::assembly::ContactModel;
+    use lbdem_kernels::dem::law::damping_ratio_from_restitution;
+    for no_tension in [false, true] {
+        let model = ContactModel {
+            normal_stiffness: 1e5f64,
+            shear_stiffness: 2e5,
+            friction: 0.3,
+            restitution: 0.5,
+            no_tension,
+        };
+        let law = model.law(2.0, f64::INFINITY);
+        assert_eq!(law.no_tension, no_tension);
+        assert_eq!(
+            (law.normal_stiffness, law.shear_stiffness, law.friction),
+            (1e5, 2e5, 0.3)
+        );
+        let c = 2.0 * damping_ratio_from_restitution(0.5) * (2.0f64 * 1e5).sqrt();
+        assert!(
+            (law.normal_damping - c).abs() <= 1e-12 * c,
+            "{} vs {c}",
+            law.normal_damping
+        );
+    }
+}
