@@ -17,6 +17,7 @@ use super::vtk::{
 use crate::engine::coupled::CoupledWorld;
 use crate::engine::dem::DemWorld;
 use crate::error::Result;
+use crate::units::{LatticeUnits, UnitSystem};
 
 /// Which snapshots a run has written: checkpointed with the run's state.
 #[derive(Clone, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
@@ -118,4 +119,21 @@ pub fn write_coupled(
     )?;
     clock.mark(step, every);
     Ok(())
+}
+
+/// [`write_coupled`] for a kind that runs in the scene's lattice units with pressure 0 at ρ₀ = 1: the snapshot
+/// at `step` (model time `step` Δt), titled by the scene's `name` (`lbdem KIND` without one).
+#[allow(clippy::too_many_arguments)]
+pub fn write_coupled_at_step(
+    dir: &Path,
+    clock: &mut SnapshotClock,
+    every: u64,
+    step: u64,
+    (name, kind, system): (Option<&str>, &str, UnitSystem),
+    units: &LatticeUnits,
+    world: &mut CoupledWorld,
+) -> Result<()> {
+    let stamp = Stamp::titled(step as f64 * units.timestep, name, kind, system);
+    let frame = LatticeFrame::of(units, world.map.origin, 1.0);
+    write_coupled(dir, clock, every, step, &stamp, world, &frame)
 }

@@ -16,8 +16,7 @@ use crate::engine::lattice::FluidLattice;
 use crate::error::{positive, LbdemError, Result};
 use crate::input::limits::{self, Budget};
 use crate::observe::health::{dem_health, finite, fluid_health};
-use crate::output::snapshots::{write_coupled, SnapshotClock};
-use crate::output::vtk::{LatticeFrame, Stamp};
+use crate::output::snapshots::{write_coupled_at_step, SnapshotClock};
 use crate::output::{csv, write_atomic};
 use crate::run::{run_in_memory, Case, Kind, OutputStage, Persist, RunOptions};
 use crate::scene::{CheckpointSection, SceneHeader, SnapshotSection, UnitsSetup};
@@ -231,23 +230,15 @@ impl ConsolidationState {
 
     /// The next VTK snapshot (grains, lattice with the pore pressure above the drained top).
     fn snapshot(&mut self, case: &Case<Consolidation>, dir: &Path, every: u64) -> Result<()> {
-        let u = &case.setup.units;
         let h = &case.scene.scene;
-        let stamp = Stamp::titled(
-            self.s as f64 * u.timestep,
-            h.name.as_deref(),
-            &h.kind,
-            h.units,
-        );
-        let frame = LatticeFrame::of(u, self.world.map.origin, 1.0);
-        write_coupled(
+        write_coupled_at_step(
             dir,
             &mut self.snapshots,
             every,
             self.s,
-            &stamp,
+            (h.name.as_deref(), &h.kind, h.units),
+            &case.setup.units,
             &mut self.world,
-            &frame,
         )
     }
 

@@ -28,8 +28,7 @@ use crate::observe::fit::fit_consolidation;
 use crate::observe::flow::fluid_row_means;
 use crate::observe::health::{dem_health, finite, fluid_health};
 use crate::observe::steady::Steadiness;
-use crate::output::snapshots::{write_coupled, SnapshotClock};
-use crate::output::vtk::{LatticeFrame, Stamp};
+use crate::output::snapshots::{write_coupled_at_step, SnapshotClock};
 use crate::output::{csv, write_atomic};
 use crate::run::{run_in_memory, Case, Kind, OutputStage, Persist, RunOptions};
 use crate::scene::{CheckpointSection, SceneHeader, SnapshotSection, UnitsSetup};
@@ -439,23 +438,15 @@ fn start(case: &Case<Terzaghi>, exec: &Exec) -> Result<TerzaghiState> {
 impl TerzaghiState {
     /// The next VTK snapshot (grains, bonds if any, lattice with the pore pressure above the drained top).
     fn snapshot(&mut self, case: &Case<Terzaghi>, dir: &Path, every: u64) -> Result<()> {
-        let u = &case.setup.units;
         let h = &case.scene.scene;
-        let stamp = Stamp::titled(
-            self.s as f64 * u.timestep,
-            h.name.as_deref(),
-            &h.kind,
-            h.units,
-        );
-        let frame = LatticeFrame::of(u, self.world.map.origin, 1.0);
-        write_coupled(
+        write_coupled_at_step(
             dir,
             &mut self.snapshots,
             every,
             self.s,
-            &stamp,
+            (h.name.as_deref(), &h.kind, h.units),
+            &case.setup.units,
             &mut self.world,
-            &frame,
         )
     }
 
