@@ -386,4 +386,42 @@ mod tests {
             );
         }
     }
+
+    /// The golden-section arm of `refine` (taken when the derivative at the bracket ends does not change sign from
+    /// + to −, i.e. no interior maximum is bracketed) must still return the bracket's best point. Two unit discs
+    /// 3 apart along x: s(θ) = 3 cos θ − 2, increasing on [−0.5, −0.1] and decreasing on [0.1, 0.5], so the
+    /// maximum over each bracket is at its end nearest θ = 0, and the start (the bracket's middle) is worse.
+    /// Tolerances: the search stops at a bracket of 4 ε π, so x is within that of the end (1e-12 is far above
+    /// it and far below the 0.2 distance to the start), and s(x) within 3 |x − end| ≤ 1e-11 of s(end).
+    #[test]
+    fn refine_golden_section_finds_the_best_end_of_a_monotone_bracket() {
+        let a = Placed::new(Vector::new(0.0, 0.0), 0.0, 1.0, 1.0);
+        let b = Placed::new(Vector::new(3.0, 0.0), 0.0, 1.0, 1.0);
+        let d = b.centre - a.centre;
+        let exact = |t: f64| 3.0 * libm::cos(t) - 2.0;
+        for (lo, hi, end) in [(-0.5f64, -0.1f64, -0.1f64), (0.1, 0.5, 0.1)] {
+            // Both ends on one side of the peak: the Newton arm's bracket condition fails.
+            let (_, g_lo, _) = gap(&a, &b, d, lo);
+            let (_, g_hi, _) = gap(&a, &b, d, hi);
+            assert!(
+                !(g_lo > 0.0 && g_hi < 0.0),
+                "bracket [{lo}, {hi}] must take the golden arm"
+            );
+            let start = 0.5 * (lo + hi);
+            let (x, s) = refine(&a, &b, d, lo, hi, start);
+            assert!(
+                (x - end).abs() <= 1e-12,
+                "bracket [{lo}, {hi}]: x = {x}, expected {end}"
+            );
+            assert!(
+                (s - exact(end)).abs() <= 1e-11,
+                "bracket [{lo}, {hi}]: s = {s}, expected {}",
+                exact(end)
+            );
+            assert!(
+                s > exact(start) + 1e-3,
+                "the refinement must beat its start"
+            );
+        }
+    }
 }
