@@ -13,6 +13,11 @@
 //! and multiplies areas by 1/(ab). The area of a disc ∩ convex polygon is the sum over the polygon's edges of the
 //! signed area of disc ∩ triangle(centre, edge start, edge end), each of which is a triangle part plus circular
 //! sectors (closed form). Error: roundoff only.
+//!
+//! [`ellipse_grid_fractions`] gives the fractions of **all** cells an ellipse can touch at once, by Green's
+//! theorem, with one transcendental per crossing of the ellipse with a lattice line (shared by the two cells the
+//! crossing separates) instead of up to eight per boundary cell; also exact up to roundoff (not bitwise the
+//! per-cell formula), and it refuses the rare ellipse with a crossing within roundoff reach of a lattice vertex.
 use crate::math::Point;
 use crate::Real;
 
@@ -236,6 +241,275 @@ pub fn ellipse_cell_fraction_oriented<T: Real>(
     ellipse_rectangle_area_oriented(c, a, b, sin_cos, [x - h, x + h, y - h, y + h]).min(T::one())
 }
 
+/// The block of cells an ellipse can touch: node columns `x0 .. x0 + w`, rows `y0 .. y0 + h` (cell of node
+/// (x, y) = [x − ½, x + ½] × [y − ½, y + ½]), not clamped to any lattice. Cell (col k, row j) of the block is
+/// entry `j * w + k` of the buffers of [`ellipse_grid_fractions`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct CellGrid {
+    /// First node column.
+    pub x0: i64,
+    /// First node row.
+    pub y0: i64,
+    /// Columns.
+    pub w: usize,
+    /// Rows.
+    pub h: usize,
+}
+
+impl CellGrid {
+    /// Number of cells, `None` on overflow.
+    pub fn cells(&self) -> Option<usize> {
+        self.w.checked_mul(self.h)
+    }
+}
+
+/// The cells within the bounding circle (radius max(a, b)) of an ellipse centred at `c`: the same bounds as
+/// `coupling::body_cell_range`, unclamped. `None` for non-positive or non-finite sizes or centres, or blocks
+/// of more than 2³¹ cells a side.
+pub fn ellipse_cell_grid<T: Real>(c: Point<T>, a: T, b: T) -> Option<CellGrid> {
+    if !(a > T::zero()) || !(b > T::zero()) {
+        return None;
+    }
+    let reach = a.max(b);
+    let half = T::lit(0.5);
+    let lo_x = (c[0] - reach - half).ceil();
+    let hi_x = (c[0] + reach + half).floor();
+    let lo_y = (c[1] - reach - half).ceil();
+    let hi_y = (c[1] + reach + half).floor();
+    let limit = 2.0f64.powi(31);
+    let ok = |v: T| v.is_finite() && v.to_f64_exact().abs() < limit;
+    if !(ok(lo_x) && ok(hi_x) && ok(lo_y) && ok(hi_y)) || hi_x < lo_x || hi_y < lo_y {
+        return None;
+    }
+    let (x0, x1) = (lo_x.to_f64_exact() as i64, hi_x.to_f64_exact() as i64);
+    let (y0, y1) = (lo_y.to_f64_exact() as i64, hi_y.to_f64_exact() as i64);
+    Some(CellGrid {
+        x0,
+        y0,
+        w: (x1 - x0 + 1) as usize,
+        h: (y1 - y0 + 1) as usize,
+    })
+}
+
+/// Index of the unit interval [o + i, o + i + 1) containing `t`, clamped to `0 .. n`, and the distance from `t`
+/// to the nearest integer offset o + i.
+#[inline]
+fn interval_and_gap<T: Real>(t: T, o: T, n: usize) -> (usize, T) {
+    let v = t - o;
+    let f = v.floor();
+    let frac = v - f;
+    let gap = frac.min(T::one() - frac);
+    let i = f.to_f64_exact();
+    let i = if i > 0.0 { (i as usize).min(n - 1) } else { 0 };
+    (i, gap)
+}
+
+/// Cell fractions of **all** cells of `grid` covered by the ellipse (centre `c`, semi-axes `a`, `b`, orientation
+/// given as `(sin θ, cos θ)`), each transcendental evaluated once per crossing of the ellipse with a lattice
+/// line instead of up to eight times per cell ([`ellipse_cell_fraction_oriented`]). Writes the fraction of
+/// cell (col k, row j) to `fractions[j * grid.w + k]` (in [0, 1]); `boundary` is scratch of the same length.
+///
+/// **Method (exact up to roundoff).** In the frame u = R(−θ)(p − c) / (a, b) the ellipse is the unit disc and
+/// areas are divided by ab. By Green's theorem the area of a region is ½ ∮ u × du along its counter-clockwise
+/// boundary; the boundary of cell ∩ disc consists of straight pieces of the cell's edges inside the disc, each
+/// contributing ½ P × Q (from P to Q), and arcs of the unit circle inside the cell, each contributing
+/// ½ (φ_out − φ_in). Every lattice-edge piece is computed once and added to the cell on one side and
+/// subtracted from the cell on the other (its two traversals are opposite; the negation is exact). Every
+/// crossing of the circle with a lattice line is where the counter-clockwise boundary leaves one cell for the
+/// next (which one follows from convexity: on a vertical line the lower crossing moves right and the upper one
+/// left, on a horizontal line the left crossing moves down and the right one up), so its angle φ is added
+/// (½ φ) to the cell it leaves and subtracted from the cell it enters; the one arc that passes the branch cut
+/// of the angle gets the missing ½ · 2π. Angles are measured from a reference direction chosen so that the
+/// cut lies clear of every lattice line. Cells that no crossing touches are entirely inside (fraction exactly 1)
+/// or outside (exactly 0), decided by their node.
+///
+/// Returns `false` (buffers unspecified) when this cannot be decided safely — a crossing lies within a small
+/// margin (≈ 1.5e-6 (1 + max(a, b)) in f64) of a lattice vertex, where roundoff could order the crossings
+/// wrongly, or every candidate cut does — or when the sizes are invalid or the buffers shorter than the grid:
+/// the caller then uses the per-cell formula [`ellipse_cell_fraction_oriented`].
+pub fn ellipse_grid_fractions<T: Real>(
+    c: Point<T>,
+    a: T,
+    b: T,
+    (sin, cos): (T, T),
+    grid: CellGrid,
+    fractions: &mut [T],
+    boundary: &mut [bool],
+) -> bool {
+    let Some(n) = grid.cells() else {
+        return false;
+    };
+    if !(a > T::zero()) || !(b > T::zero()) || !(a * b).is_finite() || grid.w == 0 || grid.h == 0 {
+        return false;
+    }
+    let (Some(fr), Some(bd)) = (fractions.get_mut(..n), boundary.get_mut(..n)) else {
+        return false;
+    };
+    fr.fill(T::zero());
+    bd.fill(false);
+    let (w, h) = (grid.w, grid.h);
+    let half = T::lit(0.5);
+    // Lattice lines: x = xl + i (i = 0..=w), y = yl + j (j = 0..=h).
+    let xl = T::lit(grid.x0 as f64) - half;
+    let yl = T::lit(grid.y0 as f64) - half;
+    let (ia, ib) = (T::one() / a, T::one() / b);
+    let map = |x: T, y: T| {
+        let (dx, dy) = (x - c[0], y - c[1]);
+        [(cos * dx + sin * dy) * ia, (cos * dy - sin * dx) * ib]
+    };
+    // Crossings closer than this to a perpendicular lattice line (lattice units) are refused: near a vertex the
+    // two crossings' order could be wrong by roundoff; near tangency a root carries an error of ≈ √ε · max(a, b).
+    let margin = T::epsilon().sqrt() * T::lit(100.0) * (T::one() + a.max(b));
+    // The branch cut: the first candidate point of the circle whose image lies clear of every lattice line.
+    let s2 = T::FRAC_1_SQRT_2();
+    let candidates = [
+        [-T::one(), T::zero()],
+        [T::zero(), -T::one()],
+        [T::one(), T::zero()],
+        [T::zero(), T::one()],
+        [-s2, -s2],
+        [s2, -s2],
+        [s2, s2],
+        [-s2, s2],
+    ];
+    let mut cut = None;
+    for u in candidates {
+        let (pa, pb) = (a * u[0], b * u[1]);
+        let (px, py) = (c[0] + cos * pa - sin * pb, c[1] + sin * pa + cos * pb);
+        let (col, gx) = interval_and_gap(px, xl, w);
+        let (row, gy) = interval_and_gap(py, yl, h);
+        if gx > margin && gy > margin {
+            cut = Some((u, row * w + col));
+            break;
+        }
+    }
+    let Some((u_cut, cut_cell)) = cut else {
+        return false;
+    };
+    // Angle of P from the reference direction r = −u_cut, in (−π, π]: discontinuous only at u_cut.
+    let r = [-u_cut[0], -u_cut[1]];
+    let angle = |p: [T; 2]| cross(r, p).portable_atan2(dot(r, p));
+    // Roots s_lo ≤ s_hi of |base + s d|² = 1, if the line meets the open disc.
+    let roots = |base: [T; 2], d: [T; 2]| -> Option<(T, T)> {
+        let qa = dot(d, d);
+        let qb = dot(base, d);
+        let qc = dot(base, base) - T::one();
+        let disc = qb * qb - qa * qc;
+        if !(disc > T::zero()) || !(qa > T::zero()) {
+            return None;
+        }
+        // The stable pair of roots: no cancellation in either.
+        let q = -(qb + disc.sqrt().copysign(qb));
+        if q == T::zero() {
+            return None;
+        }
+        let (s1, s2) = (q / qa, qc / q);
+        Some((s1.min(s2), s1.max(s2)))
+    };
+    let at = |base: [T; 2], d: [T; 2], s: T| [base[0] + s * d[0], base[1] + s * d[1]];
+    // Vertical lines (the outermost two lie strictly outside the bounding circle).
+    let dv = [sin * ia, cos * ib];
+    for i in 1..w {
+        let x = xl + T::lit(i as f64);
+        let dx = x - c[0];
+        let base = [cos * dx * ia, -(sin * dx) * ib];
+        let Some((s_lo, s_hi)) = roots(base, dv) else {
+            continue;
+        };
+        let (t_lo, t_hi) = (c[1] + s_lo, c[1] + s_hi);
+        let (row_lo, g_lo) = interval_and_gap(t_lo, yl, h);
+        let (row_hi, g_hi) = interval_and_gap(t_hi, yl, h);
+        if !(g_lo > margin && g_hi > margin) {
+            return false;
+        }
+        let (p_lo, p_hi) = (at(base, dv, s_lo), at(base, dv, s_hi));
+        let (f_lo, f_hi) = (half * angle(p_lo), half * angle(p_hi));
+        // Lower crossing: from the left column to the right one; upper crossing: back.
+        let (left_lo, right_lo) = (row_lo * w + i - 1, row_lo * w + i);
+        fr[left_lo] += f_lo;
+        fr[right_lo] -= f_lo;
+        let (left_hi, right_hi) = (row_hi * w + i - 1, row_hi * w + i);
+        fr[right_hi] += f_hi;
+        fr[left_hi] -= f_hi;
+        for k in [left_lo, right_lo, left_hi, right_hi] {
+            bd[k] = true;
+        }
+        // Upward pieces: the right edge of the left cell (+), the left edge of the right cell (−).
+        let mut from = p_lo;
+        for j in row_lo..=row_hi {
+            let to = if j == row_hi {
+                p_hi
+            } else {
+                map(x, yl + T::lit((j + 1) as f64))
+            };
+            let piece = half * cross(from, to);
+            fr[j * w + i - 1] += piece;
+            fr[j * w + i] -= piece;
+            from = to;
+        }
+    }
+    // Horizontal lines.
+    let dh = [cos * ia, -(sin * ib)];
+    for j in 1..h {
+        let y = yl + T::lit(j as f64);
+        let dy = y - c[1];
+        let base = [sin * dy * ia, cos * dy * ib];
+        let Some((s_lo, s_hi)) = roots(base, dh) else {
+            continue;
+        };
+        let (t_lo, t_hi) = (c[0] + s_lo, c[0] + s_hi);
+        let (col_lo, g_lo) = interval_and_gap(t_lo, xl, w);
+        let (col_hi, g_hi) = interval_and_gap(t_hi, xl, w);
+        if !(g_lo > margin && g_hi > margin) {
+            return false;
+        }
+        let (p_lo, p_hi) = (at(base, dh, s_lo), at(base, dh, s_hi));
+        let (f_lo, f_hi) = (half * angle(p_lo), half * angle(p_hi));
+        // Left crossing: from the row above to the row below; right crossing: back.
+        let (above_lo, below_lo) = (j * w + col_lo, (j - 1) * w + col_lo);
+        fr[above_lo] += f_lo;
+        fr[below_lo] -= f_lo;
+        let (above_hi, below_hi) = (j * w + col_hi, (j - 1) * w + col_hi);
+        fr[below_hi] += f_hi;
+        fr[above_hi] -= f_hi;
+        for k in [above_lo, below_lo, above_hi, below_hi] {
+            bd[k] = true;
+        }
+        // Rightward pieces: the bottom edge of the cell above (+), the top edge of the cell below (−).
+        let mut from = p_lo;
+        for k in col_lo..=col_hi {
+            let to = if k == col_hi {
+                p_hi
+            } else {
+                map(xl + T::lit((k + 1) as f64), y)
+            };
+            let piece = half * cross(from, to);
+            fr[j * w + k] += piece;
+            fr[(j - 1) * w + k] -= piece;
+            from = to;
+        }
+    }
+    fr[cut_cell] += T::PI();
+    bd[cut_cell] = true;
+    let ab = a * b;
+    for j in 0..h {
+        for k in 0..w {
+            let e = j * w + k;
+            fr[e] = if bd[e] {
+                (fr[e] * ab).max(T::zero()).min(T::one())
+            } else {
+                let p = map(xl + T::lit(k as f64) + half, yl + T::lit(j as f64) + half);
+                if dot(p, p) < T::one() {
+                    T::one()
+                } else {
+                    T::zero()
+                }
+            };
+        }
+    }
+    true
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -353,6 +627,128 @@ mod tests {
             full > 8 * 20 && partial > 8 * 20,
             "{full} full and {partial} partial cells"
         );
+    }
+
+    /// The grid kernel against the per-cell formula, cell by cell (both exact: roundoff apart), over many
+    /// ellipses; and its sum against πab.
+    #[test]
+    fn grid_fractions_match_the_per_cell_formula() {
+        let mut checked = 0;
+        let mut fallbacks = 0;
+        for k in 0..400 {
+            let kf = k as f64;
+            let c = crate::math::vector(10.0 + 0.731 * kf % 1.0, -3.0 + 0.377 * kf % 1.0);
+            let a = 0.07 + (kf * 0.618) % 1.0 * 6.0;
+            let b = a * (0.1 + (kf * 0.414) % 0.9);
+            let theta = kf * 0.1234 - 2.0;
+            let sc = theta.portable_sin_cos();
+            let g = ellipse_cell_grid(c, a, b).expect("a valid ellipse");
+            let n = g.cells().unwrap();
+            let (mut fr, mut bd) = ([0.0f64; 1024], [false; 1024]);
+            let (fr, bd) = (&mut fr[..n], &mut bd[..n]);
+            if !ellipse_grid_fractions(c, a, b, sc, g, fr, bd) {
+                fallbacks += 1;
+                continue;
+            }
+            let mut sum = 0.0;
+            for j in 0..g.h {
+                for i in 0..g.w {
+                    let (x, y) = ((g.x0 + i as i64) as f64, (g.y0 + j as i64) as f64);
+                    let want = ellipse_cell_fraction_oriented(c, a, b, sc, x, y);
+                    let got = fr[j * g.w + i];
+                    assert!((0.0..=1.0).contains(&got));
+                    // Both exact; roundoff of sums of terms up to π·ab (see coverage_properties' cell_roundoff).
+                    assert!(
+                        (got - want).abs() < 64.0 * f64::EPSILON * (1.0 + a * b + 64.0),
+                        "k {k} cell ({x}, {y}): {got} vs {want}"
+                    );
+                    if want == 0.0 || want == 1.0 {
+                        assert_eq!(got, want, "k {k} cell ({x}, {y})");
+                    }
+                    sum += got;
+                    checked += 1;
+                }
+            }
+            let exact = core::f64::consts::PI * a * b;
+            assert!(
+                (sum - exact).abs() < 1e-12 * (1.0 + exact),
+                "k {k}: {sum} vs {exact}"
+            );
+        }
+        assert!(
+            fallbacks < 4 && checked > 10_000,
+            "{fallbacks} fallbacks, {checked} cells"
+        );
+    }
+
+    #[test]
+    fn grid_fractions_refuse_a_crossing_at_a_lattice_vertex() {
+        // The circle of radius 5 centred on the vertex (0.5, 0.5) passes through the vertex (3.5, 4.5).
+        let c = crate::math::vector(0.5f64, 0.5);
+        let g = ellipse_cell_grid(c, 5.0, 5.0).unwrap();
+        let n = g.cells().unwrap();
+        let (mut fr, mut bd) = ([0.0f64; 1024], [false; 1024]);
+        let (fr, bd) = (&mut fr[..n], &mut bd[..n]);
+        assert!(!ellipse_grid_fractions(c, 5.0, 5.0, (0.0, 1.0), g, fr, bd));
+        // Buffers shorter than the grid are refused, not indexed out of bounds.
+        let c = crate::math::vector(0.3f64, 0.2);
+        let g = ellipse_cell_grid(c, 2.0, 1.0).unwrap();
+        let (mut fr, mut bd) = ([0.0f64; 3], [false; 3]);
+        assert!(!ellipse_grid_fractions(
+            c,
+            2.0,
+            1.0,
+            (0.0, 1.0),
+            g,
+            &mut fr,
+            &mut bd
+        ));
+    }
+
+    #[test]
+    fn grid_fractions_move_the_cut_off_a_lattice_line_and_cover_a_tiny_ellipse() {
+        // Axis-aligned ellipse whose leftmost point (the first cut candidate) lies on the line x = −0.5 and
+        // whose lowest point (the second) on y = −0.5 (both tangent, away from any vertex): the cut moves to the
+        // third candidate, and every cell still matches the per-cell formula.
+        let (c, a, b) = (crate::math::vector(1.7f64, 0.7), 2.2, 1.2);
+        let g = ellipse_cell_grid(c, a, b).unwrap();
+        let n = g.cells().unwrap();
+        let (mut fr, mut bd) = ([0.0f64; 1024], [false; 1024]);
+        let (fr, bd) = (&mut fr[..n], &mut bd[..n]);
+        assert!(ellipse_grid_fractions(c, a, b, (0.0, 1.0), g, fr, bd));
+        for j in 0..g.h {
+            for i in 0..g.w {
+                let (x, y) = ((g.x0 + i as i64) as f64, (g.y0 + j as i64) as f64);
+                let want = ellipse_cell_fraction(c, a, b, 0.0, x, y);
+                // Roundoff only (see grid_fractions_match_the_per_cell_formula).
+                assert!((fr[j * g.w + i] - want).abs() < 1e-13, "({x}, {y})");
+            }
+        }
+        // A tangent point exactly at the vertex (1.5, −0.5) is refused.
+        let (c, a, b) = (crate::math::vector(1.5f64, 0.7), 2.0, 1.2);
+        let g = ellipse_cell_grid(c, a, b).unwrap();
+        let n = g.cells().unwrap();
+        let (mut fr, mut bd) = ([0.0f64; 1024], [false; 1024]);
+        let (fr, bd) = (&mut fr[..n], &mut bd[..n]);
+        assert!(!ellipse_grid_fractions(c, a, b, (0.0, 1.0), g, fr, bd));
+        // An ellipse inside one cell: no crossing, only the cut's 2π.
+        let (c, a, b) = (crate::math::vector(3.1f64, 4.2), 0.2, 0.1);
+        let g = ellipse_cell_grid(c, a, b).unwrap();
+        let n = g.cells().unwrap();
+        let (mut fr, mut bd) = ([0.0f64; 1024], [false; 1024]);
+        let (fr, bd) = (&mut fr[..n], &mut bd[..n]);
+        assert!(ellipse_grid_fractions(
+            c,
+            a,
+            b,
+            0.4f64.portable_sin_cos(),
+            g,
+            fr,
+            bd
+        ));
+        let sum: f64 = fr.iter().sum();
+        assert!((sum - core::f64::consts::PI * a * b).abs() < 1e-15);
+        assert_eq!(fr.iter().filter(|&&f| f > 0.0).count(), 1);
     }
 
     #[test]

@@ -9,6 +9,7 @@
 use lbdem_kernels::coupling::{
     body_cell_range, reduce_exchange, rigid_velocity, BodyShape, CoupledBody, PreparedBody,
 };
+use lbdem_kernels::coverage::{ellipse_cell_grid, ellipse_grid_fractions, CellGrid};
 use lbdem_kernels::fluid::aa::{
     load_from_rows, plane_row, store_in_rows, store_post_collision_in_plane, to_collided, AaStep,
     Layout,
@@ -122,6 +123,10 @@ struct BodyCells {
     fractions: Vec<(u32, f64)>,
     points: Vec<[f64; 2]>,
     velocities: Vec<[f64; 2]>,
+    /// Scratch of the whole-ellipse kernel (`ellipse_grid_fractions`): fractions and boundary marks of the
+    /// body's unclamped cell block.
+    grid_fractions: Vec<f64>,
+    grid_boundary: Vec<bool>,
 }
 
 impl BodyCells {
@@ -172,6 +177,9 @@ impl BodyCells {
         let Some([x0, x1, y0, y1]) = self.range else {
             return;
         };
+        if self.recompute_ellipse(body, s, bc) {
+            return;
+        }
         let prepared = PreparedBody::new(body);
         let classify = EllipseCells::new(body);
         for y in y0..=y1 {
@@ -191,6 +199,80 @@ impl BodyCells {
                 }
             }
         }
+    }
+}
+
+/// The unclamped cell block of an ellipse body, its cell count and the ellipse's (a, b, θ), when the
+/// whole-ellipse kernel is to be used: not for discs, nor for blocks much larger than their part `range` on
+/// the lattice (an ellipse mostly outside it).
+fn ellipse_block(
+    body: &CoupledBody<f64>,
+    [x0, x1, y0, y1]: [usize; 4],
+) -> Option<(CellGrid, usize, f64, f64, f64)> {
+    let BodyShape::Ellipse {
+        semi_major,
+        semi_minor,
+        angle,
+    } = body.shape
+    else {
+        return None;
+    };
+    let grid = ellipse_cell_grid(body.center, semi_major, semi_minor)?;
+    let on_lattice = (x1 - x0 + 1) * (y1 - y0 + 1);
+    let n = grid.cells().filter(|&n| n <= 4 * on_lattice + 64)?;
+    Some((grid, n, semi_major, semi_minor, angle))
+}
+
+impl BodyCells {
+    /// The cells of an ellipse from the whole-ellipse kernel (one `atan2` per crossing of the ellipse with a
+    /// lattice line, `ellipse_grid_fractions`); `false` (nothing pushed) for discs, for blocks much larger than
+    /// their part on the lattice, and where the kernel refuses (a crossing within roundoff reach of a lattice
+    /// vertex): the caller then takes the per-cell formula.
+    fn recompute_ellipse<T: Real>(
+        &mut self,
+        body: &CoupledBody<f64>,
+        s: &LatticeShape,
+        bc: &Boundaries<T>,
+    ) -> bool {
+        let Some([x0, x1, y0, y1]) = self.range else {
+            return false;
+        };
+        let Some((grid, n, semi_major, semi_minor, angle)) = ellipse_block(body, [x0, x1, y0, y1])
+        else {
+            return false;
+        };
+        self.grid_fractions.resize(n, 0.0);
+        self.grid_boundary.resize(n, false);
+        if !ellipse_grid_fractions(
+            body.center,
+            semi_major,
+            semi_minor,
+            angle.portable_sin_cos(),
+            grid,
+            &mut self.grid_fractions,
+            &mut self.grid_boundary,
+        ) {
+            return false;
+        }
+        // The lattice's part of the block (the same bounds, clamped).
+        let (gx, gy) = (
+            (x0 as i64 - grid.x0) as usize,
+            (y0 as i64 - grid.y0) as usize,
+        );
+        for y in y0..=y1 {
+            let row = (y - y0 + gy) * grid.w + gx;
+            for x in x0..=x1 {
+                if on_zou_he_side(s, bc, x, y) {
+                    continue;
+                }
+                let frac = self.grid_fractions[row + x - x0];
+                if frac > 0.0 {
+                    self.fractions.push((s.index(x, y) as u32, frac));
+                    self.points.push([x as f64, y as f64]);
+                }
+            }
+        }
+        true
     }
 }
 
@@ -684,9 +766,11 @@ impl<T: Real> FluidLattice<T> {
         let s = self.shape;
         let bc = self.bc;
         // 1. Each body's cells (row-major, so in increasing node order) and its rigid velocity at them, in
-        //    parallel over bodies: only the cells of its bounding box are visited, and only those near its
-        //    boundary run the exact area formula. A body whose geometry is bitwise unchanged since the last call
-        //    keeps its cell fractions (only the rigid velocities are re-evaluated).
+        //    parallel over bodies: only the cells of its bounding box are visited. An ellipse's fractions come
+        //    from one pass over the lattice lines crossing it (`ellipse_grid_fractions`: one angle per crossing,
+        //    shared by the two cells it separates); discs, and the rare ellipse the pass refuses, take the
+        //    per-cell exact formula on the cells near their boundary. A body whose geometry is bitwise unchanged
+        //    since the last call keeps its cell fractions (only the rigid velocities are re-evaluated).
         let scratch = &mut self.cover_scratch;
         scratch.bodies.resize_with(bodies.len(), BodyCells::default);
         scratch
@@ -1539,7 +1623,29 @@ mod tests {
         )
     }
 
-    /// The straightforward re-mapping (every body's cells with the unprepared kernel, all shares sorted by node
+    /// The fractions of the cells of `body` (range `range` on the lattice): for an ellipse the whole-ellipse
+    /// kernel over its unclamped block (fresh buffers), unless it refuses; otherwise the unprepared per-cell
+    /// kernel.
+    fn reference_fractions(
+        body: &CoupledBody<f64>,
+        range: [usize; 4],
+    ) -> impl Fn(usize, usize) -> f64 {
+        let mut grid = None;
+        if let Some((g, n, a, b, angle)) = ellipse_block(body, range) {
+            let (mut fr, mut bd) = (vec![0.0; n], vec![false; n]);
+            let sc = angle.portable_sin_cos();
+            if ellipse_grid_fractions(body.center, a, b, sc, g, &mut fr, &mut bd) {
+                grid = Some((g, fr));
+            }
+        }
+        let body = *body;
+        move |x, y| match &grid {
+            Some((g, fr)) => fr[(y as i64 - g.y0) as usize * g.w + (x as i64 - g.x0) as usize],
+            None => body_cell_fraction(&body, x as f64, y as f64),
+        }
+    }
+
+    /// The straightforward re-mapping (every body's cells from fresh kernel calls, all shares sorted by node
     /// then body): what `cover_with_bodies` must reproduce bitwise.
     fn reference<T: Real>(l: &FluidLattice<T>, bodies: &[CoupledBody<f64>]) -> Bits {
         let s = l.shape;
@@ -1548,9 +1654,10 @@ mod tests {
             let Some([x0, x1, y0, y1]) = body_cell_range(body, s.nx, s.ny) else {
                 continue;
             };
+            let fraction = reference_fractions(body, [x0, x1, y0, y1]);
             for y in y0..=y1 {
                 for x in x0..=x1 {
-                    let frac = body_cell_fraction(body, x as f64, y as f64);
+                    let frac = fraction(x, y);
                     if !l.on_zou_he_side(x, y) && frac > 0.0 {
                         let v =
                             rigid_velocity(body, lbdem_kernels::math::vector(x as f64, y as f64));
