@@ -4,7 +4,7 @@ use std::path::Path;
 
 use lbdem_kernels::dem::assembly::ContactModel;
 use lbdem_kernels::fluid::boundary::{Boundaries, SideCondition};
-use lbdem_kernels::fluid::collide::{SolidOperator, Weighting};
+use lbdem_kernels::fluid::collide::SolidOperator;
 use lbdem_kernels::fluid::step::FluidParams;
 use serde::{Deserialize, Serialize};
 
@@ -19,8 +19,11 @@ use crate::observe::health::{dem_health, finite, fluid_health};
 use crate::output::snapshots::{write_coupled_at_step, SnapshotClock};
 use crate::output::{csv, write_atomic};
 use crate::run::{run_in_memory, Case, Kind, OutputStage, Persist, RunOptions};
-use crate::scene::{CheckpointSection, SceneHeader, SnapshotSection, UnitsSetup};
-use crate::units::FluidSection;
+use crate::scene::{
+    check_free_grain_operator, free_grain_choice, CheckpointSection, SceneHeader, SnapshotSection,
+    UnitsSetup,
+};
+use crate::units::{collision_of, CollisionName, FluidSection, Warnings};
 
 /// `[consolidation]`
 #[derive(Clone, Debug, Deserialize, Serialize)]
@@ -48,6 +51,27 @@ pub struct ConsolidationSection {
     pub load: f64,
     /// Model time simulated.
     pub duration: f64,
+    /// Solid operator of the grains; absent: [`fluid_choice`].
+    #[serde(default)]
+    pub solid_operator: Option<SolidOperator>,
+}
+
+/// The default fluid collision and the solid operator of a consolidation scene at relaxation time `tau`
+/// ([`free_grain_choice`]): without `consolidation.solid_operator`, TRT + ΩΛ where ΩΛ is stable with the
+/// scene's grains (rock grains, ρs/ρf = 2.65, at every τ up to 2); else Ω₁ₗ with BGK, warned.
+/// `[fluid] collision` overrides the collision.
+pub fn fluid_choice(
+    scene: &ConsolidationScene,
+    tau: f64,
+    warnings: &mut Warnings,
+) -> (CollisionName, SolidOperator) {
+    let c = &scene.consolidation;
+    free_grain_choice(
+        c.solid_operator,
+        tau,
+        c.grain_density / scene.fluid.density,
+        warnings,
+    )
 }
 
 /// A consolidation scene file.
@@ -155,19 +179,20 @@ fn start(case: &Case<Consolidation>, exec: &Exec) -> Result<ConsolidationState> 
         },
     )?;
     exec.apply(&mut fluid);
-    fluid.set_collision(crate::units::collision_of(
+    let (default_collision, op) = fluid_choice(&case.scene, u.tau, &mut Warnings::default());
+    fluid.set_collision(collision_of(
         case.scene
             .fluid
-            .checked_collision(crate::units::CollisionName::Bgk, u.tau)?,
+            .checked_collision(default_collision, u.tau)?,
     )?)?;
-    fluid.set_solid_operator(SolidOperator::LinearizedNonEquilibriumBounceBack);
+    fluid.set_solid_operator(op);
     let map = LatticeMap::of(u, [lo[0] - 0.5 * h, lo[1] - 0.5 * h]);
     let mut world = CoupledWorld::new(
         fluid,
         pk.world,
         map,
         c.fluid_radius,
-        Weighting::NobleTorczynski,
+        op.weighting(),
         substeps,
     )?;
     for &i in &tops {
@@ -279,9 +304,15 @@ impl Kind for Consolidation {
         scene.scene.require_f64()?;
         scene.output.validate()?;
         let u = scene.fluid.lattice_units()?;
-        scene
-            .fluid
-            .checked_collision(crate::units::CollisionName::Bgk, u.tau)?;
+        let (default_collision, op) = fluid_choice(scene, u.tau, &mut Warnings::default());
+        scene.fluid.checked_collision(default_collision, u.tau)?;
+        check_free_grain_operator(
+            "consolidation.solid_operator",
+            op,
+            u.tau,
+            scene.consolidation.grain_density / scene.fluid.density,
+            &mut Warnings::default(),
+        )?;
 
         let c = &scene.consolidation;
         positive("consolidation.radius", c.radius, "grain radius")?;
@@ -401,7 +432,18 @@ impl Kind for Consolidation {
     }
 
     fn setup(scene: &ConsolidationScene) -> Result<UnitsSetup> {
-        UnitsSetup::new(&scene.fluid)
+        let mut s = UnitsSetup::new(&scene.fluid)?;
+        let mut w = Warnings(std::mem::take(&mut s.warnings));
+        let (_, op) = fluid_choice(scene, s.units.tau, &mut w);
+        check_free_grain_operator(
+            "consolidation.solid_operator",
+            op,
+            s.units.tau,
+            scene.consolidation.grain_density / scene.fluid.density,
+            &mut w,
+        )?;
+        s.warnings = w.0;
+        Ok(s)
     }
 
     fn describe(case: &Case<Self>) -> String {

@@ -10,9 +10,9 @@
 //! Zou–He Darcy run on the same coverage ([`crate::observe::darcy`]), k = ν j 2L/(c_s² Δρ) with j the mass flux
 //! per unit width; n is the effective storage porosity measured from the fluid mass the slab releases,
 //! n = ΔM/(A P₀' (1 − P̄/P₀)) (A = 2L × width, P₀' the initial density excess, P̄/P₀ the analytic mean at the
-//! last snapshot). The effective n differs from the geometric 1 − ⟨ε⟩ because fluid on links between two fully
-//! covered nodes is trapped by Ω₃'s bounce-back (never drains) while partially covered nodes store fully: both
-//! porosities are reported. The diffusivity is fitted to cross-section averages over fluid-only nodes (ε = 0, as
+//! last snapshot). The effective n differs from the geometric 1 − ⟨ε⟩ because fluid at fully covered nodes is
+//! sealed in by the solid operator's bounce-back (ΩΛ, the default, and Ω₃: it never drains) while partially
+//! covered nodes store fully: both porosities are reported. The diffusivity is fitted to cross-section averages over fluid-only nodes (ε = 0, as
 //! the dissertation did) of P/P₀ at several times, by Gauss–Newton on ln c
 //! ([`crate::observe::fit::fit_diffusivity`]), to the slab series
 //! ([`lbdem_reference::analytic::slab_pressure`]).
@@ -20,7 +20,7 @@ use std::path::Path;
 
 use lbdem_kernels::coupling::{BodyShape, CoupledBody};
 use lbdem_kernels::fluid::boundary::{Boundaries, SideCondition};
-use lbdem_kernels::fluid::collide::{SolidOperator, Weighting};
+use lbdem_kernels::fluid::collide::SolidOperator;
 use lbdem_kernels::fluid::step::FluidParams;
 use lbdem_reference::analytic::{slab_mean_pressure, slab_pressure};
 use serde::{Deserialize, Serialize};
@@ -77,6 +77,24 @@ pub struct PressureDiffusionSection {
     pub darcy_pressure_drop: f64,
     /// Snapshot times as Fourier numbers c_pred t/L² (c_pred from the measured k and geometric porosity).
     pub fourier_times: Vec<f64>,
+    /// Solid operator of the fixed grains; absent: ΩΛ ([`fluid_choice`]).
+    #[serde(default)]
+    pub solid_operator: Option<SolidOperator>,
+}
+
+/// The default fluid collision and the solid operator of the (fixed) grains: ΩΛ with TRT unless
+/// `solid_operator` names another operator (then BGK, the dissertation's); `[fluid] collision` overrides the
+/// collision. ΩΛ's permeability does not move with τ (README, issue 11).
+pub fn fluid_choice(
+    scene: &PressureDiffusionScene,
+) -> (crate::units::CollisionName, SolidOperator) {
+    use crate::units::CollisionName;
+    match scene.pressure_diffusion.solid_operator {
+        None | Some(SolidOperator::LambdaConsistent) => {
+            (CollisionName::Trt, SolidOperator::LambdaConsistent)
+        }
+        Some(op) => (CollisionName::Bgk, op),
+    }
 }
 
 /// A pressure-diffusion scene file.
@@ -198,7 +216,8 @@ fn start(case: &Case<PressureDiffusion>, exec: &Exec) -> Result<DiffusionState> 
         })
         .collect();
     let tau = u.tau;
-    let wf = Weighting::NobleTorczynski;
+    let (default_collision, op) = fluid_choice(&case.scene);
+    let wf = op.weighting();
     let make = |west: f64, east: f64| -> Result<FluidLattice<f64>> {
         let mut f = FluidLattice::new(
             nx,
@@ -216,11 +235,9 @@ fn start(case: &Case<PressureDiffusion>, exec: &Exec) -> Result<DiffusionState> 
         )?;
         exec.apply(&mut f);
         f.set_collision(crate::units::collision_of(
-            case.scene
-                .fluid
-                .checked_collision(crate::units::CollisionName::Bgk, tau)?,
+            case.scene.fluid.checked_collision(default_collision, tau)?,
         )?)?;
-        f.set_solid_operator(SolidOperator::MovingWallBounceBack);
+        f.set_solid_operator(op);
         f.cover_with_bodies(&bodies, wf);
         Ok(f)
     };
@@ -475,7 +492,7 @@ impl Kind for PressureDiffusion {
         let u = scene.fluid.lattice_units()?;
         scene
             .fluid
-            .checked_collision(crate::units::CollisionName::Bgk, u.tau)?;
+            .checked_collision(fluid_choice(scene).0, u.tau)?;
 
         let d = &scene.pressure_diffusion;
         positive("pressure_diffusion.width", d.width, "slab width")?;
