@@ -123,3 +123,22 @@ fn bad_terzaghi_scenes_are_refused_naming_the_field() {
         "terzaghi.solid_operator",
     );
 }
+
+/// Needle-like grains are refused naming `terzaghi.aspect_ratio` and why (the ellipse contact kernel is
+/// checked down to b/a = 0.05; below, a phantom overlap); the limit itself is accepted.
+#[test]
+fn needle_grains_are_refused_naming_terzaghi_aspect_ratio() {
+    for a in [0.0499, 0.01, 0.0, f64::NAN] {
+        let mut s = scene();
+        s.terzaghi.aspect_ratio = Some(a);
+        let e = Case::<Terzaghi>::new(s).err().expect("refused").to_string();
+        assert!(e.contains("terzaghi.aspect_ratio"), "{a}: {e}");
+        assert!(e.contains("phantom overlap"), "{a}: {e}");
+    }
+    let mut s = scene();
+    s.terzaghi.aspect_ratio = Some(0.05);
+    if let Err(e) = Case::<Terzaghi>::new(s) {
+        // Thinner grains change the DEM critical step: another limit may refuse, but not the aspect ratio.
+        assert!(!e.to_string().contains("aspect_ratio"), "{e}");
+    }
+}

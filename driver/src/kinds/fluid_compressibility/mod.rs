@@ -358,8 +358,7 @@ impl Kind for FluidCompressibility {
     type State = CompressibilityState;
 
     fn validate(scene: &CompressibilityScene) -> Result<()> {
-        scene.scene.require_f64()?;
-        let u = scene.fluid.lattice_units()?;
+        let u = crate::scene::f64_bgk_units(&scene.scene, &scene.fluid)?;
         scene
             .fluid
             .checked_collision(piston_operator(&scene.fluid_compressibility)?.0, u.tau)?;
@@ -457,21 +456,17 @@ impl Kind for FluidCompressibility {
 
     fn describe(case: &Case<Self>) -> String {
         let labels = case.scene.scene.units.labels();
+        let c = &case.scene.fluid_compressibility;
+        let u = &case.setup.units;
         case.setup.describe(labels)
-            + &{
-                let c = &case.scene.fluid_compressibility;
-                let u = &case.setup.units;
-                let mut s = String::new();
-                s += &format!(
+            + &format!(
                 "  box {:.0} x {:.0} nodes; piston speed {:.3e} (lattice, Mach {:.3e}), travel {:.2} nodes\n",
                 u.length_to_lattice(c.length),
                 u.length_to_lattice(c.height),
                 u.velocity_to_lattice(c.piston_speed),
                 u.mach(c.piston_speed),
                 u.length_to_lattice(c.travel)
-            );
-                s
-            }
+            )
     }
 
     fn start(case: &Case<Self>, exec: &Exec) -> Result<CompressibilityState> {

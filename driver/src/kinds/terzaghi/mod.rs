@@ -18,17 +18,17 @@ use crate::engine::coupled::{CoupledWorld, LatticeMap};
 use crate::engine::dem::loading::{settle_loaded, uniaxial_strain_step, StepLoadResult};
 use crate::engine::dem::packing::{generate_packing, hexagonal_packing, PackingSpec};
 use crate::engine::dem::world::BondSpec;
-use crate::engine::dem::DemWorld;
+use crate::engine::dem::{elastic_contact, DemWorld};
 use crate::engine::exec::{Exec, ExecTarget};
 use crate::engine::lattice::FluidLattice;
-use crate::error::{positive, LbdemError, Result};
+use crate::error::{non_negative, positive, LbdemError, Result};
 use crate::input::limits::{self, Budget};
 use crate::observe::darcy::{permeability, SteadyFlow};
 use crate::observe::fit::fit_consolidation;
 use crate::observe::flow::fluid_row_means;
 use crate::observe::health::{dem_health, finite, fluid_health};
 use crate::observe::steady::Steadiness;
-use crate::output::snapshots::{write_coupled_at_step, SnapshotClock};
+use crate::output::snapshots::{chunk_with_snapshots, write_coupled_at_step, SnapshotClock};
 use crate::output::{csv, write_atomic};
 use crate::run::{run_in_memory, Case, Kind, OutputStage, Persist, RunOptions};
 use crate::scene::{
@@ -260,13 +260,7 @@ pub struct TerzaghiState {
 impl Persist for TerzaghiState {}
 
 fn contact(c: &TerzaghiSection) -> ContactModel<f64> {
-    ContactModel {
-        normal_stiffness: c.normal_stiffness,
-        shear_stiffness: c.normal_stiffness,
-        friction: c.friction,
-        restitution: 1.0,
-        no_tension: true,
-    }
+    elastic_contact(c.normal_stiffness, c.normal_stiffness, c.friction)
 }
 
 /// DEM critical step of the smallest grain with six contacts (a 2 × 2 hexagonal probe of `radius_min` and the
@@ -370,7 +364,14 @@ fn start(case: &Case<Terzaghi>, exec: &Exec) -> Result<TerzaghiState> {
         .checked_collision(default_collision, u.tau)?;
     fluid.set_collision(collision_of(collision)?)?;
     fluid.set_solid_operator(op);
-    let substeps = (u.timestep / (0.5 * critical)).ceil().max(1.0) as u32;
+    // The rule (and the refusal) of the budget, which `check` printed.
+    let substeps = limits::dem_substeps(
+        "terzaghi.normal_stiffness",
+        "terzaghi.duration",
+        None,
+        u.timestep,
+        critical,
+    )? as u32;
     let map = LatticeMap::of(u, [0.5 * h, 0.5 * h]);
     let mut world = CoupledWorld::new(fluid, dem, map, c.fluid_radius, op.weighting(), substeps)?;
     for (i, f) in before.iter().enumerate() {
@@ -763,9 +764,8 @@ impl Kind for Terzaghi {
     type State = TerzaghiState;
 
     fn validate(scene: &TerzaghiScene) -> Result<()> {
-        scene.scene.require_f64()?;
+        let u = crate::scene::f64_bgk_units(&scene.scene, &scene.fluid)?;
         scene.output.validate()?;
-        let u = scene.fluid.lattice_units()?;
         let c = &scene.terzaghi;
         for (field, v, hint) in [
             ("terzaghi.width", c.width, "packing box width"),
@@ -809,25 +809,14 @@ impl Kind for Terzaghi {
                 "make width and height at least 8 radius_max",
             ));
         }
-        crate::scene::in_unit_interval(
+        crate::error::fraction(
             "terzaghi.fluid_radius",
             c.fluid_radius,
             "0.8 keeps the 2-D pore space connected",
         )?;
-        if !(c.friction >= 0.0 && c.friction.is_finite()) {
-            return Err(LbdemError::field(
-                "terzaghi.friction",
-                c.friction,
-                "must be >= 0",
-                "e.g. 0.5",
-            ));
-        }
+        non_negative("terzaghi.friction", c.friction, "e.g. 0.5")?;
         if let Some(a) = c.aspect_ratio {
-            crate::scene::in_unit_interval(
-                "terzaghi.aspect_ratio",
-                a,
-                "1 for discs, 0.5 for the fracture test's ellipses",
-            )?;
+            crate::engine::dem::packing::check_aspect_ratio("terzaghi.aspect_ratio", a)?;
         }
         match (c.bond_stiffness, c.bond_strength) {
             (None, None) => {}
@@ -876,17 +865,13 @@ impl Kind for Terzaghi {
                 ));
             }
         }
-        let drho = u.pressure_to_density_change(c.load);
-        if drho > 0.01 {
-            return Err(LbdemError::field(
-                "terzaghi.load",
-                c.load,
-                &format!(
-                    "gives a lattice density change {drho:.3e} > 1e-2 if the fluid carries it"
-                ),
-                "lower the load, or shorten fluid.timestep",
-            ));
-        }
+        crate::scene::density_change_within(
+            "terzaghi.load",
+            c.load,
+            &u,
+            " if the fluid carries it",
+            "lower the load, or shorten fluid.timestep",
+        )?;
         if c.load > c.isotropic_stress {
             return Err(LbdemError::field(
                 "terzaghi.load",
@@ -919,11 +904,12 @@ impl Kind for Terzaghi {
         let grains = limits::grains("terzaghi.radius_min", grains)?;
         let steps = limits::steps_for("terzaghi.duration", c.duration, u.timestep, false)?;
         let critical = critical_step(c)?;
-        let substeps =
-            limits::substeps("terzaghi.normal_stiffness", u.timestep / (0.5 * critical))?;
-        limits::steps(
+        let substeps = limits::dem_substeps(
             "terzaghi.normal_stiffness",
-            limits::mul("terzaghi.duration", "the DEM step count", steps, substeps)?,
+            "terzaghi.duration",
+            Some(steps),
+            u.timestep,
+            critical,
         )?;
         let nx = limits::count(
             "terzaghi.width",
@@ -1010,17 +996,14 @@ impl Kind for Terzaghi {
             .scene
             .output
             .every(case.setup.units.timestep, state.steps);
-        let Some((dir, every)) = dir.zip(every).filter(|_| state.darcy.is_none()) else {
-            return state.advance(case);
-        };
-        if state.snapshots.first_due() {
-            state.snapshot(case, dir, every)?;
-        }
-        state.advance(case)?;
-        if state.snapshots.due(state.s, every, state.s >= state.steps) {
-            state.snapshot(case, dir, every)?;
-        }
-        Ok(())
+        let at = dir.zip(every).filter(|_| state.darcy.is_none());
+        chunk_with_snapshots(
+            state,
+            at,
+            |s| (&s.snapshots, s.s, s.s >= s.steps),
+            |s| s.advance(case),
+            |s, dir, every| s.snapshot(case, dir, every),
+        )
     }
 
     fn health(_case: &Case<Self>, state: &TerzaghiState) -> Result<()> {
