@@ -199,7 +199,8 @@ pub fn non_negative(field: &str, v: f64, hint: &str) -> Result<()> {
     }
 }
 
-/// Check that a fraction lies in (0, 1], naming the field.
+/// Check that a fraction lies in (0, 1] (e.g. `fluid_radius`, the fraction of a grain's radius the fluid sees,
+/// dissertation ch. 5.3.4), naming the field; NaN refused.
 pub fn fraction(field: &str, v: f64, hint: &str) -> Result<()> {
     if v > 0.0 && v <= 1.0 {
         Ok(())

@@ -61,6 +61,32 @@ fn bad_fields_are_named() {
     }
 }
 
+/// Needle-like grains are refused naming `packing.aspect_ratio` (the ellipse contact kernel is checked down to
+/// b/a = 0.05; below, a sharp gap peak can fall between its sampled directions and give a phantom overlap),
+/// with the reason; the limit itself and the dissertation's 0.5 are not refused for their aspect ratio.
+#[test]
+fn needle_grains_are_refused_naming_packing_aspect_ratio() {
+    let read = |value: &str| {
+        let text = BUNDLED.replacen("aspect_ratio = 1.0", &format!("aspect_ratio = {value}"), 1);
+        assert_ne!(text, BUNDLED);
+        Case::<Dry>::read(&text, "test.toml")
+            .err()
+            .map(|e| e.to_string())
+    };
+    for value in ["0.0499", "0.02", "0.0", "-0.5", "nan"] {
+        let err = read(value).expect("refused");
+        assert!(err.contains("packing.aspect_ratio"), "{value}: {err}");
+        assert!(err.contains("phantom overlap"), "{value}: {err}");
+    }
+    for value in ["0.05", "0.5"] {
+        // Thinner grains are lighter: another limit (the critical step) may still refuse the scene, but
+        // not its aspect ratio.
+        if let Some(err) = read(value) {
+            assert!(!err.contains("aspect_ratio"), "{value}: {err}");
+        }
+    }
+}
+
 #[test]
 fn small_dry_run_writes_its_outputs() {
     let text = BUNDLED

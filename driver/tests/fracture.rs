@@ -429,7 +429,7 @@ fn results_do_not_depend_on_the_thread_count() {
 #[test]
 fn bad_fracture_scenes_are_refused_naming_the_field() {
     let base = std::fs::read_to_string(quick("base")).unwrap();
-    let cases: [(&str, &str, &str); 5] = [
+    let cases: [(&str, &str, &str); 6] = [
         (
             "precision = \"f64\"",
             "precision = \"f32\"",
@@ -447,6 +447,12 @@ fn bad_fracture_scenes_are_refused_naming_the_field() {
             "loading.pressure_drop",
         ),
         ("margin = 0.2 ", "margin = -1.0 ", "fluid.margin"),
+        // Needles below b/a = 0.05: the ellipse contact kernel can miss their gap peak (phantom overlap).
+        (
+            "aspect_ratio = 0.5 ",
+            "aspect_ratio = 0.04 ",
+            "packing.aspect_ratio",
+        ),
     ];
     for (from, to, field) in cases {
         assert!(base.contains(from), "the quick scene lost `{from}`");

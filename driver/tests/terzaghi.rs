@@ -66,8 +66,10 @@ fn independent_measurements_predict_the_consolidation_coefficient_of_a_random_pa
 /// Measured (README, *Poroelastic validation*): fit +3.5 %, but RMS 6.2 %: the undrained wave rings for
 /// ~1.5 s (≈ 18 sound-crossing times; base overshoot 0.63 against γ = 0.42 at 0.25 s) and the drained
 /// surface lies about one grain radius below the top of the pack (the rows within 0.4 cm of the top carry
-/// 40 % less pressure than the series at every time). Kept ignored until the start-up criterion and the
-/// drained-surface position are settled; the tolerances are not loosened.
+/// 40 % less pressure than the series at every time). A sin² load ramp (`load_ramp`, compared with the ramped
+/// solution from the ramp's end) gives 3.5–3.9 % for ramps of 0.25–1 s (README): the overshoot goes, the lag
+/// behind the load and a fixed shape difference (upper column 3–6 % low, base 1.8 % high) stay. Kept ignored
+/// until the start-up criterion and the drained-surface position are settled; the tolerances are not loosened.
 #[test]
 #[ignore = "fails: RMS 6.2 % of γσ₀ (ringing start-up, drained surface below the pack top); see README"]
 fn terzaghi_profiles_within_three_percent_after_start_up() {
@@ -110,4 +112,33 @@ fn bad_terzaghi_scenes_are_refused_naming_the_field() {
         "terzaghi.aspect_ratio",
     );
     refused(&|s| s.terzaghi.fluid_radius = 0.0, "terzaghi.fluid_radius");
+    refused(&|s| s.terzaghi.load_ramp = Some(6.0), "terzaghi.load_ramp");
+    refused(&|s| s.terzaghi.load_ramp = Some(-0.1), "terzaghi.load_ramp");
+    // Ω₃ is refused for free grains here as in the other free-grain kinds.
+    refused(
+        &|s| {
+            s.terzaghi.solid_operator =
+                Some(lbdem_kernels::fluid::collide::SolidOperator::MovingWallBounceBack)
+        },
+        "terzaghi.solid_operator",
+    );
+}
+
+/// Needle-like grains are refused naming `terzaghi.aspect_ratio` and why (the ellipse contact kernel is
+/// checked down to b/a = 0.05; below, a phantom overlap); the limit itself is accepted.
+#[test]
+fn needle_grains_are_refused_naming_terzaghi_aspect_ratio() {
+    for a in [0.0499, 0.01, 0.0, f64::NAN] {
+        let mut s = scene();
+        s.terzaghi.aspect_ratio = Some(a);
+        let e = Case::<Terzaghi>::new(s).err().expect("refused").to_string();
+        assert!(e.contains("terzaghi.aspect_ratio"), "{a}: {e}");
+        assert!(e.contains("phantom overlap"), "{a}: {e}");
+    }
+    let mut s = scene();
+    s.terzaghi.aspect_ratio = Some(0.05);
+    if let Err(e) = Case::<Terzaghi>::new(s) {
+        // Thinner grains change the DEM critical step: another limit may refuse, but not the aspect ratio.
+        assert!(!e.to_string().contains("aspect_ratio"), "{e}");
+    }
 }

@@ -101,6 +101,48 @@ pub fn terzaghi_pressure_images(depth: f64, t: f64, c_v: f64, thickness: f64) ->
     1.0 - sum
 }
 
+/// Terzaghi's pore pressure p/(γσ₀) under a load that rises smoothly from 0 to σ₀ over `ramp`,
+/// σ(t) = σ₀ sin²(π t/(2 t_r)) for t < t_r, then σ₀ (a step has t_r = 0): by Duhamel's superposition of the
+/// step response ([`terzaghi_pressure`]) over the loading rate, p = γ ∫₀^t σ'(s) T(z, t − s) ds (Wang 2000,
+/// ch. 6: the pore-pressure equation ∂p/∂t = c_v ∂²p/∂z² + γ ∂σ/∂t is linear). Mode by mode, with
+/// a_m = (2m+1)²π² c_v/(4L²) and ω = π/t_r, the factor that replaces e^{−a t} of the step is
+/// (ω/2)(ω e^{−a t} − ω cos ωt + a sin ωt)/(a² + ω²) while loading and (ω²/2)(e^{−a t} + e^{−a (t − t_r)})/(a² + ω²)
+/// after (both → e^{−a t} as t_r → 0). Long after the ramp the solution is the step's from the ramp's middle,
+/// t − t_r/2, to O((a t_r)²).
+pub fn terzaghi_pressure_ramped(depth: f64, t: f64, c_v: f64, thickness: f64, ramp: f64) -> f64 {
+    if ramp <= 0.0 {
+        return terzaghi_pressure(depth, t, c_v, thickness);
+    }
+    if t <= 0.0 {
+        return 0.0;
+    }
+    let pi = std::f64::consts::PI;
+    let w = pi / ramp;
+    let mut p = 0.0;
+    for m in 0..100_000u32 {
+        let k = (2 * m + 1) as f64;
+        let a = k * k * pi * pi * c_v / (4.0 * thickness * thickness);
+        let factor = if t < ramp {
+            0.5 * w * (w * (-a * t).exp() - w * (w * t).cos() + a * (w * t).sin()) / (a * a + w * w)
+        } else {
+            0.5 * w * w * ((-a * t).exp() + (-a * (t - ramp)).exp()) / (a * a + w * w)
+        };
+        let term = 4.0 / (k * pi) * (k * pi * depth / (2.0 * thickness)).sin() * factor;
+        p += term;
+        // After the ramp the terms fall as (ω/a)² e^{−a (t − t_r)}/k; while loading only as 1/k³ (the tail
+        // from k on is below 16 t_d/(π³ t_r k²), t_d = L²/c_v: stopped at 1e-8).
+        let done = if t < ramp {
+            16.0 / (pi * pi * pi) * (thickness * thickness / c_v) / ramp / (k * k) < 1e-8
+        } else {
+            4.0 / (k * pi) * w * w / (a * a + w * w) * (-a * (t - ramp)).exp() < 1e-15
+        };
+        if done {
+            break;
+        }
+    }
+    p
+}
+
 /// Degree of consolidation U = 1 − ⟨p⟩/(γσ₀) = 1 − Σ_m 2/M_m² exp(−M_m² T) with M_m = (2m+1)π/2 and the time
 /// factor T = c_v t/L² (Terzaghi 1943).
 pub fn degree_of_consolidation(time_factor: f64) -> f64 {
@@ -198,6 +240,46 @@ mod tests {
         let a = terzaghi_pressure(0.7, 0.3, 2.0, 1.5);
         let b = terzaghi_pressure(1.4, 0.3, 8.0, 3.0);
         assert!((a - b).abs() < 1e-12, "{a} {b}");
+    }
+
+    #[test]
+    fn ramped_load_is_the_duhamel_superposition_of_the_step() {
+        // Independent oracle: Duhamel's integral of the step solution over the sin² loading rate by the
+        // midpoint rule (20 000 slices of the ramp; its error ~1e-8 here), at times during and after the ramp.
+        let (l, c, tr) = (2.0, 0.5, 0.4);
+        let duhamel = |z: f64, t: f64| {
+            let n = 20_000;
+            let end = t.min(tr);
+            let ds = end / n as f64;
+            (0..n)
+                .map(|i| {
+                    let s = (i as f64 + 0.5) * ds;
+                    let rate =
+                        std::f64::consts::PI / (2.0 * tr) * (std::f64::consts::PI * s / tr).sin();
+                    rate * terzaghi_pressure(z, t - s, c, l) * ds
+                })
+                .sum::<f64>()
+        };
+        for &t in &[0.1, 0.25, 0.4, 0.5, 1.0, 3.0] {
+            for &z in &[0.1, 0.7, 1.5, 2.0] {
+                let a = terzaghi_pressure_ramped(z, t, c, l, tr);
+                let b = duhamel(z, t);
+                assert!((a - b).abs() < 2e-6, "z {z} t {t}: {a} vs {b}");
+            }
+        }
+        // A vanishing ramp is the step; long after the ramp the step from its middle (to O((a t_r)²)).
+        for &z in &[0.3, 1.0, 2.0] {
+            let a = terzaghi_pressure_ramped(z, 0.8, c, l, 1e-9);
+            assert!((a - terzaghi_pressure(z, 0.8, c, l)).abs() < 1e-9);
+            let late = terzaghi_pressure_ramped(z, 6.0, c, l, tr);
+            let shifted = terzaghi_pressure(z, 6.0 - 0.5 * tr, c, l);
+            assert!(
+                (late - shifted).abs() < 2e-3 * shifted,
+                "{late} vs {shifted}"
+            );
+        }
+        // The load is fully on at the end of the ramp: nothing has drained at the sealed base of a thick layer.
+        assert!((terzaghi_pressure_ramped(2.0, tr, 1e-4, l, tr) - 1.0).abs() < 1e-6);
     }
 
     #[test]

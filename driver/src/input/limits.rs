@@ -74,6 +74,27 @@ pub fn substeps(field: &str, n: f64) -> Result<u64> {
     Ok(n.max(1))
 }
 
+/// The DEM sub-steps per fluid step of a coupled run whose DEM step is at most half its critical step:
+/// Δt_fluid / (½ Δt_critical) rounded up (at least 1), refused above [`MAX_SUBSTEPS`] naming
+/// `stiffness_field`; with `fluid_steps`, the DEM step count of the run refused above [`MAX_STEPS`] too
+/// (naming `stiffness_field`; an overflow names `duration_field`).
+pub fn dem_substeps(
+    stiffness_field: &str,
+    duration_field: &str,
+    fluid_steps: Option<u64>,
+    timestep: f64,
+    critical: f64,
+) -> Result<u64> {
+    let n = substeps(stiffness_field, timestep / (0.5 * critical))?;
+    if let Some(fluid_steps) = fluid_steps {
+        steps(
+            stiffness_field,
+            mul(duration_field, "the DEM step count", fluid_steps, n)?,
+        )?;
+    }
+    Ok(n)
+}
+
 /// Largest scene file read: 1 MiB. Scene files hold parameters, not data; reading stops here, so neither a
 /// huge file nor an endless one (`/dev/zero`) is read into memory.
 pub const MAX_SCENE_BYTES: u64 = 1 << 20;

@@ -53,6 +53,31 @@ impl SnapshotClock {
     }
 }
 
+/// One chunk of a run with snapshots, in the cadence every such kind follows: the first snapshot before the
+/// first chunk, then one after any chunk at whose end [`SnapshotClock::due`]. `at`: the run directory and the
+/// steps between snapshots (`None`: the chunk only); `clock`: the state's clock, the step reached and whether
+/// the run is finished; `snapshot`: write one (and [`SnapshotClock::mark`] it).
+pub fn chunk_with_snapshots<S>(
+    state: &mut S,
+    at: Option<(&Path, u64)>,
+    clock: impl Fn(&S) -> (&SnapshotClock, u64, bool),
+    advance: impl FnOnce(&mut S) -> Result<()>,
+    mut snapshot: impl FnMut(&mut S, &Path, u64) -> Result<()>,
+) -> Result<()> {
+    let Some((dir, every)) = at else {
+        return advance(state);
+    };
+    if clock(state).0.first_due() {
+        snapshot(state, dir, every)?;
+    }
+    advance(state)?;
+    let (c, step, finished) = clock(state);
+    if c.due(step, every, finished) {
+        snapshot(state, dir, every)?;
+    }
+    Ok(())
+}
+
 /// Snapshot `index` of every series of a run: `particles` (with the fluid's loads on the grains when given),
 /// `bonds` (when the world has bonds) and `lattice` (when given), all at `stamp.time`.
 pub fn write_series<T: lbdem_kernels::Real>(

@@ -49,15 +49,6 @@ macro_rules! scene_file {
 }
 pub(crate) use scene_file;
 
-/// A fraction in (0, 1] (e.g. `fluid_radius`, the fraction of a grain's radius the fluid sees, dissertation
-/// ch. 5.3.4), NaN refused.
-pub fn in_unit_interval(field: &str, value: f64, hint: &str) -> Result<()> {
-    if value > 0.0 && value <= 1.0 {
-        return Ok(());
-    }
-    Err(LbdemError::field(field, value, "must lie in (0, 1]", hint))
-}
-
 /// A grain radius (`field`) the fluid resolves: at least 2 lattice spacings once scaled by `fluid_radius`.
 pub fn check_resolved(
     field: &str,
@@ -74,6 +65,40 @@ pub fn check_resolved(
         "is seen by the fluid as fewer than 2 lattice spacings",
         "refine fluid.spacing",
     ))
+}
+
+/// The shared start of validating a kind that runs the lattice in f64 with a BGK default collision: refuse
+/// f32 (`scene.precision`), validate `[fluid]` and its collision (`fluid.collision`, `fluid.magic`, `fluid.tau`
+/// in both precisions), and return the lattice units.
+pub fn f64_bgk_units(
+    header: &SceneHeader,
+    fluid: &FluidSection,
+) -> Result<crate::units::LatticeUnits> {
+    header.require_f64()?;
+    let u = fluid.lattice_units()?;
+    fluid.checked_collision(crate::units::CollisionName::Bgk, u.tau)?;
+    Ok(u)
+}
+
+/// Refuse a pressure (`field`, `value`) that is a lattice density change above 1e-2 (the lattice fluid is
+/// weakly compressible: its errors grow as Δρ²); `consequence` says what would go wrong, `fix` what to do.
+pub fn density_change_within(
+    field: &str,
+    value: f64,
+    units: &crate::units::LatticeUnits,
+    consequence: &str,
+    fix: &str,
+) -> Result<()> {
+    let drho = units.pressure_to_density_change(value);
+    if drho > 0.01 {
+        return Err(LbdemError::field(
+            field,
+            value,
+            &format!("gives a lattice density change {drho:.3e} > 1e-2{consequence}"),
+            fix,
+        ));
+    }
+    Ok(())
 }
 
 /// Floating-point precision of the kernels.

@@ -1,9 +1,10 @@
 //! `[packing]` and `[solid]`: the grains, their packing procedure (dissertation ch. 2), contact material and bonds,
 //! shared by the kinds that pack a bonded sample (`dry`, `fracture`).
-use lbdem_kernels::dem::assembly::ContactModel;
 use lbdem_kernels::Real;
 use serde::{Deserialize, Serialize};
 
+use crate::engine::dem::elastic_contact;
+use crate::engine::dem::packing::check_aspect_ratio;
 use crate::engine::dem::packing::{hexagonal_packing, PackingSpec};
 use crate::engine::dem::world::{BondSpec, DemWorld};
 use crate::error::{non_negative, positive, LbdemError, Result};
@@ -136,6 +137,7 @@ pub fn validate_packing_and_solid(p: &PackingSection, s: &SolidSection) -> Resul
     positive("packing.width", p.width, "box width along x")?;
     positive("packing.height", p.height, "box height along y")?;
     positive("packing.radius_min", p.radius_min, "e.g. 0.07 cm")?;
+    check_aspect_ratio("packing.aspect_ratio", p.aspect_ratio)?;
     grain_count(p)?;
     positive("packing.radius_max", p.radius_max, "e.g. 0.11 cm")?;
     positive("packing.density", p.density, "e.g. 2.65 g/cm^3")?;
@@ -227,13 +229,11 @@ pub fn packing_spec<T: Real>(p: &PackingSection, s: &SolidSection) -> PackingSpe
         solid_fraction: T::lit(p.solid_fraction),
         density: T::lit(p.density),
         seed: p.seed,
-        contact: ContactModel {
-            normal_stiffness: T::lit(s.normal_stiffness),
-            shear_stiffness: T::lit(s.shear_stiffness),
-            friction: T::lit(s.friction),
-            restitution: T::one(),
-            no_tension: true,
-        },
+        contact: elastic_contact(
+            T::lit(s.normal_stiffness),
+            T::lit(s.shear_stiffness),
+            T::lit(s.friction),
+        ),
         timestep: T::lit(s.timestep),
         growth_steps: p.growth_steps,
         isotropic_stress: T::lit(p.isotropic_stress),

@@ -36,6 +36,11 @@ use crate::Real;
 
 /// Number of equally spaced normal angles sampled before the Newton refinement.
 pub const ELLIPSE_SAMPLES: usize = 32;
+
+/// Smallest aspect ratio b/a for which [`ellipse_ellipse`] is checked to find the gap's global maximum (see its
+/// **Domain**): thinner ellipses can get a phantom overlap, so scenes refuse them.
+pub const ELLIPSE_MIN_ASPECT_RATIO: f64 = 0.05;
+
 /// (cos θ_k, sin θ_k) for θ_k = 2πk/32, the sample directions (correctly rounded f64).
 #[allow(clippy::approx_constant)]
 const SAMPLE_DIRECTIONS: [[f64; 2]; ELLIPSE_SAMPLES] = [

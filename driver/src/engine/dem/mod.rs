@@ -26,3 +26,22 @@ pub use loading::{
 };
 pub use packing::{boxed_sample, generate_packing, hexagonal_packing, Packing, PackingSpec};
 pub use world::{Bond, BondLaw, BondSpec, BreakRecord, DemWorld, Platen, PlatenControl, SampleBox};
+
+use lbdem_kernels::dem::assembly::ContactModel;
+use lbdem_kernels::Real;
+
+/// The contact model of lbdem's grains: linear springs k_n, k_s with Coulomb friction μ, no dashpot
+/// (restitution 1) and no tension (dissertation ch. 2, the PFC model of table 6.1).
+pub fn elastic_contact<T: Real>(
+    normal_stiffness: T,
+    shear_stiffness: T,
+    friction: T,
+) -> ContactModel<T> {
+    ContactModel {
+        normal_stiffness,
+        shear_stiffness,
+        friction,
+        restitution: T::one(),
+        no_tension: true,
+    }
+}

@@ -4,23 +4,26 @@ use std::path::Path;
 
 use lbdem_kernels::dem::assembly::ContactModel;
 use lbdem_kernels::fluid::boundary::{Boundaries, SideCondition};
-use lbdem_kernels::fluid::collide::{SolidOperator, Weighting};
+use lbdem_kernels::fluid::collide::SolidOperator;
 use lbdem_kernels::fluid::step::FluidParams;
 use serde::{Deserialize, Serialize};
 
 use crate::engine::coupled::{CoupledWorld, LatticeMap};
 use crate::engine::dem::packing::{boxed_sample, hexagonal_packing};
-use crate::engine::dem::DemWorld;
+use crate::engine::dem::{elastic_contact, DemWorld};
 use crate::engine::exec::{Exec, ExecTarget};
 use crate::engine::lattice::FluidLattice;
-use crate::error::{positive, LbdemError, Result};
+use crate::error::{non_negative, positive, LbdemError, Result};
 use crate::input::limits::{self, Budget};
 use crate::observe::health::{dem_health, finite, fluid_health};
-use crate::output::snapshots::{write_coupled_at_step, SnapshotClock};
+use crate::output::snapshots::{chunk_with_snapshots, write_coupled_at_step, SnapshotClock};
 use crate::output::{csv, write_atomic};
 use crate::run::{run_in_memory, Case, Kind, OutputStage, Persist, RunOptions};
-use crate::scene::{CheckpointSection, SceneHeader, SnapshotSection, UnitsSetup};
-use crate::units::FluidSection;
+use crate::scene::{
+    check_free_grain_operator, free_grain_choice, CheckpointSection, SceneHeader, SnapshotSection,
+    UnitsSetup,
+};
+use crate::units::{collision_of, CollisionName, FluidSection, Warnings};
 
 /// `[consolidation]`
 #[derive(Clone, Debug, Deserialize, Serialize)]
@@ -48,6 +51,27 @@ pub struct ConsolidationSection {
     pub load: f64,
     /// Model time simulated.
     pub duration: f64,
+    /// Solid operator of the grains; absent: [`fluid_choice`].
+    #[serde(default)]
+    pub solid_operator: Option<SolidOperator>,
+}
+
+/// The default fluid collision and the solid operator of a consolidation scene at relaxation time `tau`
+/// ([`free_grain_choice`]): without `consolidation.solid_operator`, TRT + ΩΛ where ΩΛ is stable with the
+/// scene's grains (rock grains, ρs/ρf = 2.65, at every τ up to 2); else Ω₁ₗ with BGK, warned.
+/// `[fluid] collision` overrides the collision.
+pub fn fluid_choice(
+    scene: &ConsolidationScene,
+    tau: f64,
+    warnings: &mut Warnings,
+) -> (CollisionName, SolidOperator) {
+    let c = &scene.consolidation;
+    free_grain_choice(
+        c.solid_operator,
+        tau,
+        c.grain_density / scene.fluid.density,
+        warnings,
+    )
 }
 
 /// A consolidation scene file.
@@ -104,6 +128,10 @@ pub struct ConsolidationState {
 
 impl Persist for ConsolidationState {}
 
+fn contact(c: &ConsolidationSection) -> ContactModel<f64> {
+    elastic_contact(c.normal_stiffness, c.normal_stiffness, c.friction)
+}
+
 fn start(case: &Case<Consolidation>, exec: &Exec) -> Result<ConsolidationState> {
     let c = &case.scene.consolidation;
     let u = &case.setup.units;
@@ -117,17 +145,18 @@ fn start(case: &Case<Consolidation>, exec: &Exec) -> Result<ConsolidationState> 
         c.grain_density,
         c.seed,
     );
-    let model = ContactModel {
-        normal_stiffness: c.normal_stiffness,
-        shear_stiffness: c.normal_stiffness,
-        friction: c.friction,
-        restitution: 1.0,
-        no_tension: true,
-    };
+    let model = contact(c);
     // Critical step first (with a tiny step that always passes), then the sub-step count.
     let probe = DemWorld::new(parts.clone(), model, 1e-300)?;
     let critical = probe.critical_time_step();
-    let substeps = (u.timestep / (0.5 * critical)).ceil().max(1.0) as u32;
+    // The rule (and the refusal) of the budget, which `check` printed.
+    let substeps = limits::dem_substeps(
+        "consolidation.normal_stiffness",
+        "consolidation.duration",
+        None,
+        u.timestep,
+        critical,
+    )? as u32;
     let mut pk = boxed_sample(parts, model, u.timestep / substeps as f64, None, 0.0)?;
     let (lo, hi) = pk.world.bounds();
     pk.world.platens[pk.sample_box.top].active = false;
@@ -155,19 +184,20 @@ fn start(case: &Case<Consolidation>, exec: &Exec) -> Result<ConsolidationState> 
         },
     )?;
     exec.apply(&mut fluid);
-    fluid.set_collision(crate::units::collision_of(
+    let (default_collision, op) = fluid_choice(&case.scene, u.tau, &mut Warnings::default());
+    fluid.set_collision(collision_of(
         case.scene
             .fluid
-            .checked_collision(crate::units::CollisionName::Bgk, u.tau)?,
+            .checked_collision(default_collision, u.tau)?,
     )?)?;
-    fluid.set_solid_operator(SolidOperator::LinearizedNonEquilibriumBounceBack);
+    fluid.set_solid_operator(op);
     let map = LatticeMap::of(u, [lo[0] - 0.5 * h, lo[1] - 0.5 * h]);
     let mut world = CoupledWorld::new(
         fluid,
         pk.world,
         map,
         c.fluid_radius,
-        Weighting::NobleTorczynski,
+        op.weighting(),
         substeps,
     )?;
     for &i in &tops {
@@ -276,12 +306,17 @@ impl Kind for Consolidation {
     type State = ConsolidationState;
 
     fn validate(scene: &ConsolidationScene) -> Result<()> {
-        scene.scene.require_f64()?;
+        let u = crate::scene::f64_bgk_units(&scene.scene, &scene.fluid)?;
         scene.output.validate()?;
-        let u = scene.fluid.lattice_units()?;
-        scene
-            .fluid
-            .checked_collision(crate::units::CollisionName::Bgk, u.tau)?;
+        let (default_collision, op) = fluid_choice(scene, u.tau, &mut Warnings::default());
+        scene.fluid.checked_collision(default_collision, u.tau)?;
+        check_free_grain_operator(
+            "consolidation.solid_operator",
+            op,
+            u.tau,
+            scene.consolidation.grain_density / scene.fluid.density,
+            &mut Warnings::default(),
+        )?;
 
         let c = &scene.consolidation;
         positive("consolidation.radius", c.radius, "grain radius")?;
@@ -309,30 +344,19 @@ impl Kind for Consolidation {
                 "e.g. 0.05",
             ));
         }
-        crate::scene::in_unit_interval(
+        crate::error::fraction(
             "consolidation.fluid_radius",
             c.fluid_radius,
             "the dissertation uses 0.6-0.95",
         )?;
-        if !(c.friction >= 0.0 && c.friction.is_finite()) {
-            return Err(LbdemError::field(
-                "consolidation.friction",
-                c.friction,
-                "must be >= 0",
-                "e.g. 0.5",
-            ));
-        }
-        let drho = u.pressure_to_density_change(c.load);
-        if drho > 0.01 {
-            return Err(LbdemError::field(
-                "consolidation.load",
-                c.load,
-                &format!(
-                    "gives a lattice density change {drho:.3e} > 1e-2 if the fluid carries it"
-                ),
-                "lower the load, or shorten fluid.timestep",
-            ));
-        }
+        non_negative("consolidation.friction", c.friction, "e.g. 0.5")?;
+        crate::scene::density_change_within(
+            "consolidation.load",
+            c.load,
+            &u,
+            " if the fluid carries it",
+            "lower the load, or shorten fluid.timestep",
+        )?;
         crate::scene::check_resolved("consolidation.radius", c.radius, c.fluid_radius, &u)?;
         Ok(())
     }
@@ -351,26 +375,14 @@ impl Kind for Consolidation {
         // The DEM sub-steps per fluid step, from the critical step of the same grains as the run's (all of
         // one radius: a 2 x 2 probe has the run's critical step).
         let probe = hexagonal_packing(2, 2, c.radius, 1.0, 0.0, c.grain_density, c.seed);
-        let model = ContactModel {
-            normal_stiffness: c.normal_stiffness,
-            shear_stiffness: c.normal_stiffness,
-            friction: c.friction,
-            restitution: 1.0,
-            no_tension: true,
-        };
+        let model = contact(c);
         let critical = DemWorld::new(probe, model, 1e-300)?.critical_time_step();
-        let substeps = limits::substeps(
+        let substeps = limits::dem_substeps(
             "consolidation.normal_stiffness",
-            u.timestep / (0.5 * critical),
-        )?;
-        limits::steps(
-            "consolidation.normal_stiffness",
-            limits::mul(
-                "consolidation.duration",
-                "the DEM step count",
-                steps,
-                substeps,
-            )?,
+            "consolidation.duration",
+            Some(steps),
+            u.timestep,
+            critical,
         )?;
         let side = |n: u64| (n as f64 * 2.0 * c.radius / u.spacing).ceil();
         let nx = limits::count(
@@ -401,17 +413,26 @@ impl Kind for Consolidation {
     }
 
     fn setup(scene: &ConsolidationScene) -> Result<UnitsSetup> {
-        UnitsSetup::new(&scene.fluid)
+        let mut s = UnitsSetup::new(&scene.fluid)?;
+        let mut w = Warnings(std::mem::take(&mut s.warnings));
+        let (_, op) = fluid_choice(scene, s.units.tau, &mut w);
+        check_free_grain_operator(
+            "consolidation.solid_operator",
+            op,
+            s.units.tau,
+            scene.consolidation.grain_density / scene.fluid.density,
+            &mut w,
+        )?;
+        s.warnings = w.0;
+        Ok(s)
     }
 
     fn describe(case: &Case<Self>) -> String {
         let labels = case.scene.scene.units.labels();
+        let c = &case.scene.consolidation;
+        let u = &case.setup.units;
         case.setup.describe(labels)
-            + &{
-                let c = &case.scene.consolidation;
-                let u = &case.setup.units;
-                let mut s = String::new();
-                s += &format!(
+            + &format!(
                 "  {} x {} grains of radius {:.2} nodes; stiffness {:.4e}, load {:.4e} (lattice); {} steps\n",
                 c.columns,
                 c.rows,
@@ -419,9 +440,7 @@ impl Kind for Consolidation {
                 u.force_to_lattice(c.normal_stiffness) * u.spacing,
                 u.force_to_lattice(c.load) * u.spacing,
                 u.time_to_steps(c.duration).round()
-            );
-                s
-            }
+            )
     }
 
     fn start(case: &Case<Self>, exec: &Exec) -> Result<ConsolidationState> {
@@ -449,21 +468,17 @@ impl Kind for Consolidation {
         state: &mut ConsolidationState,
         dir: Option<&Path>,
     ) -> Result<()> {
-        let Some((dir, every)) = dir.zip(
-            case.scene
-                .output
-                .every(case.setup.units.timestep, state.steps),
-        ) else {
-            return state.advance(case);
-        };
-        if state.snapshots.first_due() {
-            state.snapshot(case, dir, every)?;
-        }
-        state.advance(case)?;
-        if state.snapshots.due(state.s, every, state.s >= state.steps) {
-            state.snapshot(case, dir, every)?;
-        }
-        Ok(())
+        let every = case
+            .scene
+            .output
+            .every(case.setup.units.timestep, state.steps);
+        chunk_with_snapshots(
+            state,
+            dir.zip(every),
+            |s| (&s.snapshots, s.s, s.s >= s.steps),
+            |s| s.advance(case),
+            |s, dir, every| s.snapshot(case, dir, every),
+        )
     }
 
     fn health(_case: &Case<Self>, state: &ConsolidationState) -> Result<()> {

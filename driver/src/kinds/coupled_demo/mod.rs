@@ -24,7 +24,6 @@
 //! (`[output] vtk`, `snapshot_interval` in steps; docs/outputs.md), `summary.json` (written last).
 use std::path::Path;
 
-use lbdem_kernels::dem::assembly::ContactModel;
 use lbdem_kernels::dem::shape::Particle;
 use lbdem_kernels::fluid::boundary::Boundaries;
 use lbdem_kernels::fluid::collide::{Collision, SolidOperator, Trt};
@@ -33,13 +32,14 @@ use serde::{Deserialize, Serialize};
 use serde_json::json;
 
 use crate::engine::coupled::{CoupledWorld, LatticeMap};
+use crate::engine::dem::elastic_contact;
 use crate::engine::dem::DemWorld;
 use crate::engine::exec::{Exec, ExecTarget};
 use crate::engine::lattice::FluidLattice;
 use crate::error::{LbdemError, Result};
 use crate::input::limits::{self, Budget};
 use crate::observe::health::{dem_health, fluid_health};
-use crate::output::snapshots::{write_coupled, SnapshotClock};
+use crate::output::snapshots::{chunk_with_snapshots, write_coupled, SnapshotClock};
 use crate::output::vtk::{LatticeFrame, Stamp, Units};
 use crate::output::{csv, write_atomic};
 use crate::run::{Case, CheckpointInterval, Kind, OutputStage, Persist};
@@ -158,13 +158,7 @@ impl DemoScene {
                 p
             })
             .collect();
-        let model = ContactModel {
-            normal_stiffness: 1.0,
-            shear_stiffness: 1.0,
-            friction: 0.5,
-            restitution: 1.0,
-            no_tension: true,
-        };
+        let model = elastic_contact(1.0, 1.0, 0.5);
         let mut dem = DemWorld::new(particles, model, 1.0)?;
         dem.local_damping = 0.0;
         CoupledWorld::new(fluid, dem, LatticeMap::identity(), 1.0, op.weighting(), 1)
@@ -365,26 +359,23 @@ impl Kind for CoupledDemo {
                 &LatticeFrame::lattice_units(),
             )
         };
-        if let (Some(dir), Some(every)) = (dir, every) {
-            if state.snapshots.first_due() {
-                snapshot(state, dir, every)?;
-            }
-        }
-        let n = d.record_interval.min(d.steps - state.world.steps());
-        for _ in 0..n {
-            state.world.step();
-        }
-        // A diverged state is not recorded (the rows so far are the outputs of a diverged run).
-        Self::health(case, state)?;
-        let row = state.row();
-        state.rows.push(row);
-        if let (Some(dir), Some(every)) = (dir, every) {
-            let step = state.world.steps();
-            if state.snapshots.due(step, every, step >= d.steps) {
-                snapshot(state, dir, every)?;
-            }
-        }
-        Ok(())
+        chunk_with_snapshots(
+            state,
+            dir.zip(every),
+            |s| (&s.snapshots, s.world.steps(), s.world.steps() >= d.steps),
+            |state| {
+                let n = d.record_interval.min(d.steps - state.world.steps());
+                for _ in 0..n {
+                    state.world.step();
+                }
+                // A diverged state is not recorded (the rows so far are the outputs of a diverged run).
+                Self::health(case, state)?;
+                let row = state.row();
+                state.rows.push(row);
+                Ok(())
+            },
+            snapshot,
+        )
     }
 
     fn health(_case: &Case<Self>, state: &DemoState) -> Result<()> {

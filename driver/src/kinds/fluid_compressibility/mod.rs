@@ -4,7 +4,7 @@ use std::path::Path;
 
 use lbdem_kernels::coupling::{BodyShape, CoupledBody};
 use lbdem_kernels::fluid::boundary::{Boundaries, SideCondition};
-use lbdem_kernels::fluid::collide::{SolidOperator, Weighting};
+use lbdem_kernels::fluid::collide::SolidOperator;
 use lbdem_kernels::fluid::step::FluidParams;
 use serde::{Deserialize, Serialize};
 
@@ -34,6 +34,10 @@ pub struct CompressibilitySection {
     pub travel: f64,
     /// Relaxation time after the piston stops (physical).
     pub settle: f64,
+    /// Solid operator of the piston: `"lambda_consistent"` (ΩΛ, default, with TRT) or
+    /// `"moving_wall_bounce_back"` (Ω₃, with BGK); see [`piston_operator`].
+    #[serde(default)]
+    pub solid_operator: Option<SolidOperator>,
 }
 
 /// A fluid-compressibility scene file.
@@ -77,8 +81,8 @@ pub struct CompressibilityOutcome {
     pub error: f64,
     /// Mean exchange force on the piston over its height, ⟨F_x⟩/H (lattice), same window.
     pub piston_stress: f64,
-    /// Compressibility from the piston force, (Δρ_front − Δρ_back)/(ρ₀ ⟨F_x⟩/H) (physical): reported, not
-    /// asserted; see [`FluidCompressibility`].
+    /// Compressibility from the piston force, (Δρ_front − Δρ_back)/(ρ₀ ⟨F_x⟩/H) (physical); see
+    /// [`FluidCompressibility`].
     pub force_based: f64,
     /// force_based / expected − 1.
     pub force_based_error: f64,
@@ -133,8 +137,6 @@ pub struct CompressibilityState {
 
 impl Persist for CompressibilityState {}
 
-const WF: Weighting = Weighting::NobleTorczynski;
-
 impl CompressibilityState {
     fn new(case: &Case<FluidCompressibility>, exec: &Exec) -> Result<Self> {
         let c = &case.scene.fluid_compressibility;
@@ -160,17 +162,16 @@ impl CompressibilityState {
             },
         )?;
         exec.apply(&mut fluid);
+        let (collision, op) = piston_operator(c)?;
         fluid.set_collision(crate::units::collision_of(
-            case.scene
-                .fluid
-                .checked_collision(crate::units::CollisionName::Bgk, u.tau)?,
+            case.scene.fluid.checked_collision(collision, u.tau)?,
         )?)?;
-        fluid.set_solid_operator(SolidOperator::MovingWallBounceBack);
+        fluid.set_solid_operator(op);
         // The piston: an ellipse 2b = 3 nodes thick with its major axis along y, 50 × the box height long, so
         // its faces are flat to (H/2)²/(2a) · b/a ≈ 1e-5 nodes across the box. Fluid fills the chamber behind
         // it.
         let face = 0.6 * (nx - 1) as f64;
-        fluid.cover_with_bodies(&[piston(face, 0.0, ny)], WF);
+        fluid.cover_with_bodies(&[piston(face, 0.0, ny)], op.weighting());
         let v0 = front_volume(
             &fluid.solid_fraction_map(),
             nx,
@@ -215,8 +216,9 @@ impl CompressibilityState {
             } else {
                 0.0
             };
+            let wf = self.fluid.solid_operator().weighting();
             self.fluid
-                .cover_with_bodies(&[piston(self.face, v, ny)], WF);
+                .cover_with_bodies(&[piston(self.face, v, ny)], wf);
             self.fluid.step();
             self.face += v;
             if s >= window {
@@ -295,25 +297,58 @@ pub fn simulate(case: &Case<FluidCompressibility>) -> Result<CompressibilityOutc
     Ok(state.outcome(case))
 }
 
+/// The piston's solid operator and the collision that goes with it (`[fluid] collision` overrides): ΩΛ with
+/// TRT unless `solid_operator` names Ω₃ (then BGK). The operators that let the fluid's pressure through a fully
+/// covered body (Ω₁, Ω₁ₗ, Ω₂: the two chambers equalise, Δρ ≈ 1e-5 instead of 1.6e-2) are refused.
+pub fn piston_operator(
+    c: &CompressibilitySection,
+) -> Result<(crate::units::CollisionName, SolidOperator)> {
+    use crate::units::CollisionName;
+    match c.solid_operator {
+        None | Some(SolidOperator::LambdaConsistent) => {
+            Ok((CollisionName::Trt, SolidOperator::LambdaConsistent))
+        }
+        Some(SolidOperator::MovingWallBounceBack) => {
+            Ok((CollisionName::Bgk, SolidOperator::MovingWallBounceBack))
+        }
+        Some(op) => Err(LbdemError::field(
+            "fluid_compressibility.solid_operator",
+            op.name(),
+            "lets the fluid's pressure through the fully covered piston (the two chambers equalise)",
+            "use \"lambda_consistent\" (the default) or \"moving_wall_bounce_back\"",
+        )),
+    }
+}
+
 /// The fluid-compressibility kind (ch. 4.5.4, fig. 4.8–4.10, table 4.1).
 ///
 /// DEM platens do not act on the fluid in lbdem (the coupling sees particles only), so the platen is a rigid
 /// body the PSM coverage supports: a very flat ellipse (3 nodes thick, 100 box heights long, major axis along
-/// y) spanning every row of a walled box, so nothing leaks past it (Ω₃ is moving-wall bounce-back at its fully
-/// covered nodes; Ω₁ was tried and lets the two chambers equalise through the piston). It moves west with a
-/// smooth sin² velocity profile by `travel`, stops, and the fluid settles: the west chamber is compressed, the
-/// east one (behind the piston) expanded. (A piston reaching the east wall does not work: the fluid carried
-/// inside it moves with it and leaves a void at the wall, density 0.34 after half a spacing of travel.)
+/// y) spanning every row of a walled box, so nothing leaks past it. Its solid operator is ΩΛ with TRT
+/// ([`piston_operator`]; Ω₃ selectable): both seal the fully covered nodes (ΩΛ and Ω₃ bounce back what
+/// arrives from outside the body; Ω₁ and Ω₁ₗ were tried and let the two chambers equalise through the
+/// piston). It moves west with a smooth sin² velocity profile by `travel`, stops, and the fluid settles: the
+/// west chamber is compressed, the east one (behind the piston) expanded. (A piston reaching the east wall
+/// does not work: the fluid carried inside it moves with it and leaves a void at the wall, density 0.34 after
+/// half a spacing of travel.)
 ///
-/// **Measured**: the compressibility of the front chamber, β = (ΔV/V)/Δp with ΔV/V from the piston's coverage
-/// and Δp = c_s² Δρ of its free fluid, against 1/(ρ₀ c_s²) (eq. 4.19) in physical units through
+/// **Measured**: (1) the compressibility of the front chamber, β = (ΔV/V)/Δp with ΔV/V from the piston's
+/// coverage and Δp = c_s² Δρ of its free fluid, against 1/(ρ₀ c_s²) (eq. 4.19) in physical units through
 /// [`LatticeUnits`]: this checks that the moving PSM piston is tight and that the lattice fluid's density
-/// follows its volume as a fluid of that compressibility. **Reported only**: the dissertation's platen version,
-/// β = Δρ/(ρ₀ σ) with σ the stress on the platen, here (Δρ_front − Δρ_back)/(ρ₀ ⟨F_x⟩/H). At rest it is right
-/// (a piston held between chambers at different densities feels c_s² Δρ H to 1 %), but after the piston has
-/// moved the Ω₃ exchange force is 2.4× too large at 3 nodes thickness and 8× at 10: fluid momentum stays
-/// trapped at the fully covered nodes (total fluid momentum −1.7 and −6.5 lattice units, steady, with the
-/// fluid at rest) and keeps pushing on the piston. Platen-loaded fluid (Terzaghi) needs that fixed first.
+/// follows its volume as a fluid of that compressibility; (2) the dissertation's platen version,
+/// β = Δρ/(ρ₀ σ) with σ the stress on the platen, here (Δρ_front − Δρ_back)/(ρ₀ ⟨F_x⟩/H). Under Ω₃ (2) is
+/// 2.4× off at 3 nodes thickness and 8× at 10 (issue 14 item 4; `examples/piston_probe.rs` takes the exchange
+/// apart node by node): every row of the piston carries its share c_s² Δρ of the pressure force to 1e-5
+/// except the two rows that touch the north and south walls, which carry 70× it. While the piston moves, Ω₃'s
+/// moving-wall term 6 w_i ρ c_i·u_s puts momentum into the diagonal populations of those rows; after it stops,
+/// each such population is reversed by the piston's bounce-back and by the wall's half-way bounce-back in turn
+/// and never relaxes (a fully covered Ω₃ node never collides): a standing loop that pushes the piston and the
+/// walls apart for ever (fluid momentum −1.0 trapped there; with periodic north/south sides the force is
+/// right to 1e-5). ΩΛ redistributes the populations that come from inside the body or from a wall to the
+/// solid's equilibrium, so no loop survives: the force is right to 0.3 % (the two wall rows carry 5/6 of a
+/// share) at 3 and at 10 nodes thickness.
+///
+/// [`LatticeUnits`]: crate::units::LatticeUnits
 pub struct FluidCompressibility;
 
 impl Kind for FluidCompressibility {
@@ -323,11 +358,10 @@ impl Kind for FluidCompressibility {
     type State = CompressibilityState;
 
     fn validate(scene: &CompressibilityScene) -> Result<()> {
-        scene.scene.require_f64()?;
-        let u = scene.fluid.lattice_units()?;
+        let u = crate::scene::f64_bgk_units(&scene.scene, &scene.fluid)?;
         scene
             .fluid
-            .checked_collision(crate::units::CollisionName::Bgk, u.tau)?;
+            .checked_collision(piston_operator(&scene.fluid_compressibility)?.0, u.tau)?;
 
         let c = &scene.fluid_compressibility;
         positive("fluid_compressibility.length", c.length, "box length")?;
@@ -422,21 +456,17 @@ impl Kind for FluidCompressibility {
 
     fn describe(case: &Case<Self>) -> String {
         let labels = case.scene.scene.units.labels();
+        let c = &case.scene.fluid_compressibility;
+        let u = &case.setup.units;
         case.setup.describe(labels)
-            + &{
-                let c = &case.scene.fluid_compressibility;
-                let u = &case.setup.units;
-                let mut s = String::new();
-                s += &format!(
+            + &format!(
                 "  box {:.0} x {:.0} nodes; piston speed {:.3e} (lattice, Mach {:.3e}), travel {:.2} nodes\n",
                 u.length_to_lattice(c.length),
                 u.length_to_lattice(c.height),
                 u.velocity_to_lattice(c.piston_speed),
                 u.mach(c.piston_speed),
                 u.length_to_lattice(c.travel)
-            );
-                s
-            }
+            )
     }
 
     fn start(case: &Case<Self>, exec: &Exec) -> Result<CompressibilityState> {

@@ -348,7 +348,7 @@ impl FractureScene {
             ));
         }
         for (k, b) in self.heterogeneity.iter().enumerate() {
-            crate::scene::in_unit_interval(
+            crate::error::fraction(
                 &format!("heterogeneity[{k}].fluid_radius"),
                 b.fluid_radius,
                 "ch. 6.8.1 uses 0.6 and 0.95",
@@ -376,7 +376,7 @@ impl FractureScene {
             ));
         }
         if let Some(f) = &self.fluid {
-            crate::scene::in_unit_interval("fluid.fluid_radius", f.fluid_radius, "table 6.2: 0.6")?;
+            crate::error::fraction("fluid.fluid_radius", f.fluid_radius, "table 6.2: 0.6")?;
             positive("fluid.margin", f.margin, "e.g. 0.3 cm of free fluid")?;
             self.fluid_setup(f, &mut Warnings::default())?;
         } else if l.pressure_drop > 0.0 {

@@ -10,9 +10,9 @@
 //! Zou–He Darcy run on the same coverage ([`crate::observe::darcy`]), k = ν j 2L/(c_s² Δρ) with j the mass flux
 //! per unit width; n is the effective storage porosity measured from the fluid mass the slab releases,
 //! n = ΔM/(A P₀' (1 − P̄/P₀)) (A = 2L × width, P₀' the initial density excess, P̄/P₀ the analytic mean at the
-//! last snapshot). The effective n differs from the geometric 1 − ⟨ε⟩ because fluid on links between two fully
-//! covered nodes is trapped by Ω₃'s bounce-back (never drains) while partially covered nodes store fully: both
-//! porosities are reported. The diffusivity is fitted to cross-section averages over fluid-only nodes (ε = 0, as
+//! last snapshot). The effective n differs from the geometric 1 − ⟨ε⟩ because fluid at fully covered nodes is
+//! sealed in by the solid operator's bounce-back (ΩΛ, the default, and Ω₃: it never drains) while partially
+//! covered nodes store fully: both porosities are reported. The diffusivity is fitted to cross-section averages over fluid-only nodes (ε = 0, as
 //! the dissertation did) of P/P₀ at several times, by Gauss–Newton on ln c
 //! ([`crate::observe::fit::fit_diffusivity`]), to the slab series
 //! ([`lbdem_reference::analytic::slab_pressure`]).
@@ -20,7 +20,7 @@ use std::path::Path;
 
 use lbdem_kernels::coupling::{BodyShape, CoupledBody};
 use lbdem_kernels::fluid::boundary::{Boundaries, SideCondition};
-use lbdem_kernels::fluid::collide::{SolidOperator, Weighting};
+use lbdem_kernels::fluid::collide::SolidOperator;
 use lbdem_kernels::fluid::step::FluidParams;
 use lbdem_reference::analytic::{slab_mean_pressure, slab_pressure};
 use serde::{Deserialize, Serialize};
@@ -77,6 +77,24 @@ pub struct PressureDiffusionSection {
     pub darcy_pressure_drop: f64,
     /// Snapshot times as Fourier numbers c_pred t/L² (c_pred from the measured k and geometric porosity).
     pub fourier_times: Vec<f64>,
+    /// Solid operator of the fixed grains; absent: ΩΛ ([`fluid_choice`]).
+    #[serde(default)]
+    pub solid_operator: Option<SolidOperator>,
+}
+
+/// The default fluid collision and the solid operator of the (fixed) grains: ΩΛ with TRT unless
+/// `solid_operator` names another operator (then BGK, the dissertation's); `[fluid] collision` overrides the
+/// collision. ΩΛ's permeability does not move with τ (README, issue 11).
+pub fn fluid_choice(
+    scene: &PressureDiffusionScene,
+) -> (crate::units::CollisionName, SolidOperator) {
+    use crate::units::CollisionName;
+    match scene.pressure_diffusion.solid_operator {
+        None | Some(SolidOperator::LambdaConsistent) => {
+            (CollisionName::Trt, SolidOperator::LambdaConsistent)
+        }
+        Some(op) => (CollisionName::Bgk, op),
+    }
 }
 
 /// A pressure-diffusion scene file.
@@ -198,7 +216,8 @@ fn start(case: &Case<PressureDiffusion>, exec: &Exec) -> Result<DiffusionState> 
         })
         .collect();
     let tau = u.tau;
-    let wf = Weighting::NobleTorczynski;
+    let (default_collision, op) = fluid_choice(&case.scene);
+    let wf = op.weighting();
     let make = |west: f64, east: f64| -> Result<FluidLattice<f64>> {
         let mut f = FluidLattice::new(
             nx,
@@ -216,11 +235,9 @@ fn start(case: &Case<PressureDiffusion>, exec: &Exec) -> Result<DiffusionState> 
         )?;
         exec.apply(&mut f);
         f.set_collision(crate::units::collision_of(
-            case.scene
-                .fluid
-                .checked_collision(crate::units::CollisionName::Bgk, tau)?,
+            case.scene.fluid.checked_collision(default_collision, tau)?,
         )?)?;
-        f.set_solid_operator(SolidOperator::MovingWallBounceBack);
+        f.set_solid_operator(op);
         f.cover_with_bodies(&bodies, wf);
         Ok(f)
     };
@@ -264,6 +281,38 @@ fn start(case: &Case<PressureDiffusion>, exec: &Exec) -> Result<DiffusionState> 
     })
 }
 
+/// The drainage's snapshot steps, sorted and without repeats: Fo L²/c rounded (at least 1) for each Fourier
+/// number Fo of `fourier_times`, with L the slab's half-length (nodes) and c the diffusivity the Darcy run
+/// measured (nodes²/step). The step count follows from that measurement, so it is refused here, at run time,
+/// above [`limits::MAX_STEPS`], naming `pressure_diffusion.fourier_times` (a scene cannot reach this in a short
+/// run: the Darcy run before it needs of the order of L²/c steps to become steady, and is capped at
+/// `DARCY_MAX_STEPS`, while the refusal needs Fo L²/c > 10⁹ with Fo ≤ 10).
+fn drainage_steps(fourier_times: &[f64], half_length: f64, c_geo: f64) -> Result<Vec<u64>> {
+    let fourier_unit = half_length * half_length / c_geo;
+    let mut times: Vec<u64> = fourier_times
+        .iter()
+        .map(|f| (f * fourier_unit).round().max(1.0) as u64)
+        .collect();
+    times.sort_unstable();
+    times.dedup();
+    if let Some(&last) = times.last() {
+        if last > limits::MAX_STEPS {
+            return Err(LbdemError::field(
+                "pressure_diffusion.fourier_times",
+                format!("{fourier_times:?}"),
+                &format!(
+                    "with the diffusivity the Darcy run measured ({c_geo:.3e} nodes^2/step: one Fourier unit \
+                     L^2/c is {fourier_unit:.3e} steps) the drainage needs {last} steps, above the limit of {} \
+                     steps per run",
+                    limits::MAX_STEPS
+                ),
+                "use smaller Fourier times, a shorter slab (pressure_diffusion.width) or a coarser fluid.spacing",
+            ));
+        }
+    }
+    Ok(times)
+}
+
 impl DiffusionState {
     fn finished(&self) -> bool {
         self.darcy.is_none() && self.raw.len() >= self.times.len()
@@ -303,31 +352,11 @@ impl DiffusionState {
                     .sum::<f64>()
                     / ((nx - 2) * ny) as f64;
             let c_geo = k * CS2 / (nu * geometric_porosity);
-            let mut times: Vec<u64> = case
-                .scene
-                .pressure_diffusion
-                .fourier_times
-                .iter()
-                .map(|f| (f * half_length * half_length / c_geo).round().max(1.0) as u64)
-                .collect();
-            times.sort_unstable();
-            times.dedup();
-            // The drainage's step count follows from the diffusivity just measured: refused above the limit
-            // of every run, naming the field that sets it.
-            if let Some(&last) = times.last() {
-                let fo = half_length * half_length / c_geo;
-                limits::steps("pressure_diffusion.fourier_times", last).map_err(|e| {
-                    LbdemError::field(
-                        "pressure_diffusion.fourier_times",
-                        format!("{:?}", case.scene.pressure_diffusion.fourier_times),
-                        &format!(
-                            "with the diffusivity measured by the Darcy run ({c_geo:.3e} nodes^2/step: one                              Fourier unit L^2/c is {fo:.3e} steps) the drainage needs {last} steps, above the                              limit of {} steps per run ({e})",
-                            limits::MAX_STEPS
-                        ),
-                        "use smaller Fourier times, a shorter slab (pressure_diffusion.width) or a coarser                          fluid.spacing",
-                    )
-                })?;
-            }
+            let times = drainage_steps(
+                &case.scene.pressure_diffusion.fourier_times,
+                half_length,
+                c_geo,
+            )?;
             // Columns with fluid-only nodes, and those nodes.
             self.columns = (1..nx - 1)
                 .map(|x| {
@@ -471,11 +500,10 @@ impl Kind for PressureDiffusion {
     type State = DiffusionState;
 
     fn validate(scene: &PressureDiffusionScene) -> Result<()> {
-        scene.scene.require_f64()?;
-        let u = scene.fluid.lattice_units()?;
+        let u = crate::scene::f64_bgk_units(&scene.scene, &scene.fluid)?;
         scene
             .fluid
-            .checked_collision(crate::units::CollisionName::Bgk, u.tau)?;
+            .checked_collision(fluid_choice(scene).0, u.tau)?;
 
         let d = &scene.pressure_diffusion;
         positive("pressure_diffusion.width", d.width, "slab width")?;
@@ -500,7 +528,7 @@ impl Kind for PressureDiffusion {
             d.darcy_pressure_drop,
             "pressure drop of the permeability run",
         )?;
-        crate::scene::in_unit_interval(
+        crate::error::fraction(
             "pressure_diffusion.fluid_radius",
             d.fluid_radius,
             "the dissertation uses 0.6-0.95",
@@ -514,7 +542,8 @@ impl Kind for PressureDiffusion {
                 "pressure_diffusion.fourier_times",
                 format!("{:?}", d.fourier_times),
                 &format!(
-                    "must be a non-empty list of positive Fourier numbers c t / L^2, each at most                      {MAX_FOURIER} (the slab is drained to 1e-10 of the overpressure by then)"
+                    "must be a non-empty list of positive Fourier numbers c t / L^2, each at most \
+                     {MAX_FOURIER} (the slab is drained to 1e-10 of the overpressure by then)"
                 ),
                 "e.g. [0.05, 0.1, 0.2, 0.4, 0.8, 1.5]",
             ));
@@ -526,15 +555,13 @@ impl Kind for PressureDiffusion {
                 d.darcy_pressure_drop,
             ),
         ] {
-            let drho = u.pressure_to_density_change(p);
-            if drho > 0.01 {
-                return Err(LbdemError::field(
-                    field,
-                    p,
-                    &format!("gives a lattice density change {drho:.3e} > 1e-2: Darcy's law would pick up compressibility and inertia errors"),
-                    "lower it, or shorten fluid.timestep (raising the lattice sound speed)",
-                ));
-            }
+            crate::scene::density_change_within(
+                field,
+                p,
+                &u,
+                ": Darcy's law would pick up compressibility and inertia errors",
+                "lower it, or shorten fluid.timestep (raising the lattice sound speed)",
+            )?;
         }
         Ok(())
     }
@@ -596,24 +623,19 @@ impl Kind for PressureDiffusion {
 
     fn describe(case: &Case<Self>) -> String {
         let labels = case.scene.scene.units.labels();
+        let d = &case.scene.pressure_diffusion;
+        let u = &case.setup.units;
         case.setup.describe(labels)
-            + &{
-                let d = &case.scene.pressure_diffusion;
-                let u = &case.setup.units;
-                let l = labels;
-                let mut s = String::new();
-                s += &format!(
+            + &format!(
                 "  packing box {} x {} {}, about {:.0} x {:.0} nodes; overpressure -> lattice density excess {:.3e}; Darcy drop -> {:.3e}\n",
                 d.width,
                 d.height,
-                l.length,
+                labels.length,
                 u.length_to_lattice(d.width),
                 u.length_to_lattice(d.height),
                 u.pressure_to_density_change(d.overpressure),
                 u.pressure_to_density_change(d.darcy_pressure_drop)
-            );
-                s
-            }
+            )
     }
 
     fn start(case: &Case<Self>, exec: &Exec) -> Result<DiffusionState> {
@@ -666,5 +688,53 @@ impl Kind for PressureDiffusion {
         // The profiles are in profiles.csv.
         o.profiles.clear();
         Ok(serde_json::to_value(&o).unwrap_or_default())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::drainage_steps;
+    use crate::input::limits::MAX_STEPS;
+
+    #[test]
+    fn drainage_steps_are_fourier_times_over_the_measured_diffusivity() {
+        // L = 60 nodes, c = 0.5 nodes^2/step: one Fourier unit L^2/c = 7200 steps (exact in binary).
+        let t = drainage_steps(&[1.0, 0.05, 0.5, 0.5], 60.0, 0.5).unwrap();
+        assert_eq!(t, vec![360, 3600, 7200]);
+        // A Fourier time far below one step still takes one step.
+        assert_eq!(drainage_steps(&[1e-9], 1.0, 1.0).unwrap(), vec![1]);
+    }
+
+    #[test]
+    fn drainage_above_the_step_limit_is_refused_naming_fourier_times() {
+        // L = 1, c = 1: the step count is the Fourier number itself, so the limit is met exactly.
+        let at = MAX_STEPS as f64;
+        assert_eq!(
+            drainage_steps(&[0.5, at], 1.0, 1.0).unwrap(),
+            vec![1, MAX_STEPS]
+        );
+        let over = drainage_steps(&[0.5, at + 1.0], 1.0, 1.0)
+            .unwrap_err()
+            .to_string();
+        assert!(over.contains("pressure_diffusion.fourier_times"), "{over}");
+        assert!(over.contains(&format!("{}", MAX_STEPS + 1)), "{over}");
+        // The realistic case: a tight pack measured at c = 1e-7 nodes^2/step in a slab of half-length 60
+        // nodes needs 10 x 3600 / 1e-7 = 3.6e11 steps to reach Fo = 10.
+        let tight = drainage_steps(&[0.1, 10.0], 60.0, 1e-7)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            tight.contains("pressure_diffusion.fourier_times"),
+            "{tight}"
+        );
+        assert!(tight.contains("Darcy run measured"), "{tight}");
+        // The message is prose (the hint's line is indented by two blanks; a broken line continuation once
+        // left runs of twenty).
+        assert!(
+            !tight.contains("   "),
+            "no run of blanks in the message: {tight}"
+        );
+        // A pack that blocks the flow (c = 0) needs unboundedly many steps: refused, not run for ever.
+        assert!(drainage_steps(&[0.1], 60.0, 0.0).is_err());
     }
 }

@@ -18,7 +18,6 @@
 use std::path::Path;
 
 use lbdem_kernels::coupling::{BodyShape, CoupledBody};
-use lbdem_kernels::dem::assembly::ContactModel;
 use lbdem_kernels::dem::shape::Particle;
 use lbdem_kernels::fluid::boundary::Boundaries;
 use lbdem_kernels::fluid::collide::{
@@ -29,13 +28,14 @@ use lbdem_reference::analytic::sangani_acrivos_drag;
 use serde::{Deserialize, Serialize};
 
 use crate::engine::coupled::{CoupledWorld, LatticeMap};
+use crate::engine::dem::elastic_contact;
 use crate::engine::dem::DemWorld;
 use crate::engine::exec::{Exec, ExecTarget};
 use crate::engine::lattice::FluidLattice;
 use crate::error::{positive, LbdemError, Result};
 use crate::input::limits::{self, Budget};
 use crate::observe::health::{dem_health, fluid_health};
-use crate::output::snapshots::{write_coupled, SnapshotClock};
+use crate::output::snapshots::{chunk_with_snapshots, write_coupled, SnapshotClock};
 use crate::output::vtk::{LatticeFrame, Scale, Stamp};
 use crate::output::{csv, write_atomic};
 use crate::run::{run_in_memory, Case, Kind, OutputStage, Persist, RunOptions};
@@ -215,13 +215,7 @@ pub fn free_disc_world(
     let disc = Particle::disc(lbdem_kernels::math::Vector::from(center), radius, density);
     let mass = disc.mass;
     // No contacts exist; the stiffness only enters the DEM's critical-step check, kept far above Δt = 1.
-    let model = ContactModel {
-        normal_stiffness: 1e-6 * mass,
-        shear_stiffness: 1e-6 * mass,
-        friction: 0.0,
-        restitution: 1.0,
-        no_tension: true,
-    };
+    let model = elastic_contact(1e-6 * mass, 1e-6 * mass, 0.0);
     // Body-force density balancing the applied force at the initial coverage.
     let body = CoupledBody {
         center: lbdem_kernels::math::Vector::from(center),
@@ -590,21 +584,16 @@ impl Kind for TerminalVelocity {
                 &LatticeFrame::of(&u, [0.0; 2], 1.0),
             )
         };
-        if let (Some(dir), Some(every)) = (dir, every) {
-            if state.snapshots.first_due() {
-                snapshot(state, dir, every)?;
-            }
-        }
-        state.advance(case);
-        if let (Some(dir), Some(every)) = (dir, every) {
-            if state
-                .snapshots
-                .due(state.done, every, state.done >= state.steps)
-            {
-                snapshot(state, dir, every)?;
-            }
-        }
-        Ok(())
+        chunk_with_snapshots(
+            state,
+            dir.zip(every),
+            |s| (&s.snapshots, s.done, s.done >= s.steps),
+            |s| {
+                s.advance(case);
+                Ok(())
+            },
+            snapshot,
+        )
     }
 
     fn health(_case: &Case<Self>, state: &TerminalState) -> Result<()> {
