@@ -276,7 +276,7 @@ pub fn ellipse_cell_grid<T: Real>(c: Point<T>, a: T, b: T) -> Option<CellGrid> {
     let hi_x = (c[0] + reach + half).floor();
     let lo_y = (c[1] - reach - half).ceil();
     let hi_y = (c[1] + reach + half).floor();
-    let limit = 2.0f64.powi(31);
+    let limit = 2_147_483_648.0_f64; // 2^31: lattice indices stay far inside i64 and usize
     let ok = |v: T| v.is_finite() && v.to_f64_exact().abs() < limit;
     if !(ok(lo_x) && ok(hi_x) && ok(lo_y) && ok(hi_y)) || hi_x < lo_x || hi_y < lo_y {
         return None;
