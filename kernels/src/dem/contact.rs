@@ -392,12 +392,12 @@ mod tests {
         }
     }
 
-    /// The golden-section arm of `refine` (taken when the derivative at the bracket ends does not change sign from
-    /// + to −, i.e. no interior maximum is bracketed) must still return the bracket's best point. Two unit discs
-    /// 3 apart along x: s(θ) = 3 cos θ − 2, increasing on [−0.5, −0.1] and decreasing on [0.1, 0.5], so the
-    /// maximum over each bracket is at its end nearest θ = 0, and the start (the bracket's middle) is worse.
-    /// Tolerances: the search stops at a bracket of 4 ε π, so x is within that of the end (1e-12 is far above
-    /// it and far below the 0.2 distance to the start), and s(x) within 3 |x − end| ≤ 1e-11 of s(end).
+    /// The golden-section arm of `refine` (taken when the derivative at the bracket ends does not go from positive
+    /// to negative, i.e. no interior maximum is bracketed) must still return the bracket's best point. Two unit
+    /// discs 3 apart along x: s(θ) = 3 cos θ − 2, increasing on [−0.5, −0.1] and decreasing on [0.1, 0.5], so
+    /// the maximum over each bracket is at its end nearest θ = 0, and the start (the bracket's middle) is worse.
+    /// Tolerances: the search stops at a bracket of 4 ε π, so x is within that of the end (1e-12 is far above it
+    /// and far below the 0.2 distance to the start), and s(x) within 3 |x − end| ≤ 1e-11 of s(end).
     #[test]
     fn refine_golden_section_finds_the_best_end_of_a_monotone_bracket() {
         let a = Placed::new(Vector::new(0.0, 0.0), 0.0, 1.0, 1.0);
