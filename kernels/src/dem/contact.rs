@@ -394,17 +394,33 @@ mod tests {
 
     /// The golden-section arm of `refine` (taken when the derivative at the bracket ends does not go from positive
     /// to negative, i.e. no interior maximum is bracketed) must still return the bracket's best point. Two unit
-    /// discs 3 apart along x: s(θ) = 3 cos θ − 2, increasing on [−0.5, −0.1] and decreasing on [0.1, 0.5], so
-    /// the maximum over each bracket is at its end nearest θ = 0, and the start (the bracket's middle) is worse.
+    /// discs 3 apart along the direction φ: s(θ) = 3 cos(θ − φ) − 2, monotone on each bracket below, so the
+    /// maximum over a bracket is at its end nearest φ, and the start (the bracket's middle) is worse. Brackets
+    /// of the width the search uses (2 × 2π/32 ≈ 0.39) and narrower, on both sides of the peak, and one that
+    /// straddles θ = 0 (lo < 0 < hi, as the search's bracket around sample 0 does).
     /// Tolerances: the search stops at a bracket of 4 ε π, so x is within that of the end (1e-12 is far above it
-    /// and far below the 0.2 distance to the start), and s(x) within 3 |x − end| ≤ 1e-11 of s(end).
+    /// and far below the ≥ 0.1 distance to the start), and s(x) within 3 |x − end| ≤ 1e-11 of s(end).
     #[test]
     fn refine_golden_section_finds_the_best_end_of_a_monotone_bracket() {
-        let a = Placed::new(Vector::new(0.0, 0.0), 0.0, 1.0, 1.0);
-        let b = Placed::new(Vector::new(3.0, 0.0), 0.0, 1.0, 1.0);
-        let d = b.centre - a.centre;
-        let exact = |t: f64| 3.0 * libm::cos(t) - 2.0;
-        for (lo, hi, end) in [(-0.5f64, -0.1f64, -0.1f64), (0.1, 0.5, 0.1)] {
+        let cases: [(f64, f64, f64, f64); 6] = [
+            // (φ, lo, hi, end)
+            (0.0, -0.5, -0.1, -0.1),
+            (0.0, 0.1, 0.5, 0.1),
+            (0.0, -0.3, -0.1, -0.1),
+            (0.0, 0.1, 0.3, 0.1),
+            (0.5, -0.2, 0.3, 0.3),
+            (-0.5, -0.3, 0.2, -0.3),
+        ];
+        for (phi, lo, hi, end) in cases {
+            let a = Placed::new(Vector::new(0.0, 0.0), 0.0, 1.0, 1.0);
+            let b = Placed::new(
+                Vector::new(3.0 * libm::cos(phi), 3.0 * libm::sin(phi)),
+                0.0,
+                1.0,
+                1.0,
+            );
+            let d = b.centre - a.centre;
+            let exact = |t: f64| 3.0 * libm::cos(t - phi) - 2.0;
             // Both ends on one side of the peak: the Newton arm's bracket condition fails.
             let (_, g_lo, _) = gap(&a, &b, d, lo);
             let (_, g_hi, _) = gap(&a, &b, d, hi);
@@ -416,11 +432,11 @@ mod tests {
             let (x, s) = refine(&a, &b, d, lo, hi, start);
             assert!(
                 (x - end).abs() <= 1e-12,
-                "bracket [{lo}, {hi}]: x = {x}, expected {end}"
+                "φ = {phi}, [{lo}, {hi}]: x = {x}, expected {end}"
             );
             assert!(
                 (s - exact(end)).abs() <= 1e-11,
-                "bracket [{lo}, {hi}]: s = {s}, expected {}",
+                "φ = {phi}, [{lo}, {hi}]: s = {s}, expected {}",
                 exact(end)
             );
             assert!(
@@ -428,5 +444,19 @@ mod tests {
                 "the refinement must beat its start"
             );
         }
+    }
+
+    /// `refine` never returns less than its start: `ellipse_ellipse` keeps the larger of a sample and its
+    /// refinement, and relies on the refinement being at least the start. Checked where the bracket's own search
+    /// loses to the start (start at the peak θ = 0, bracket [0.1, 0.5] beside it; s(0) − s(0.1) ≈ 0.015, far
+    /// above roundoff): the start and its value are returned exactly.
+    #[test]
+    fn refine_returns_its_start_when_the_bracket_search_does_worse() {
+        let a = Placed::new(Vector::new(0.0, 0.0), 0.0, 1.0, 1.0);
+        let b = Placed::new(Vector::new(3.0, 0.0), 0.0, 1.0, 1.0);
+        let d = b.centre - a.centre;
+        let (x, s) = refine(&a, &b, d, 0.1, 0.5, 0.0);
+        assert_eq!(x, 0.0);
+        assert_eq!(s, gap(&a, &b, d, 0.0).0);
     }
 }
