@@ -468,6 +468,14 @@ impl LatticeUnits {
         )
     }
 
+    /// One line of the figures a sweep of lattice cases shares: h, Δt, τ and the lattice viscosity.
+    pub fn brief(&self) -> String {
+        format!(
+            "  spacing h {:.6e}, time step {:.6e}, tau {:.6}, lattice viscosity {:.6}\n",
+            self.spacing, self.timestep, self.tau, self.lattice_viscosity
+        )
+    }
+
     /// Mach number of a physical speed: u / c_s.
     pub fn mach(&self, u: f64) -> f64 {
         u / self.sound_speed

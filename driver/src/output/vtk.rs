@@ -584,14 +584,9 @@ pub fn particle_arrays<T: Real>(
     out
 }
 
-/// The grains as a `.vtp` document: one vertex per grain at its centre, with [`particle_arrays`] as point data.
-pub fn particles_vtp<T: Real>(
-    stamp: &Stamp,
-    w: &DemWorld<T>,
-    fluid: Option<&[([f64; 2], f64)]>,
-) -> Vec<u8> {
-    let points: Vec<[f64; 2]> = w
-        .particles
+/// The grains' centres in the stamp's length unit (the points of the particle and bond files).
+fn particle_points<T: Real>(stamp: &Stamp, w: &DemWorld<T>) -> Vec<[f64; 2]> {
+    w.particles
         .iter()
         .map(|p| {
             [
@@ -599,7 +594,16 @@ pub fn particles_vtp<T: Real>(
                 p.position[1].to_f64_exact() * stamp.units.scale.length,
             ]
         })
-        .collect();
+        .collect()
+}
+
+/// The grains as a `.vtp` document: one vertex per grain at its centre, with [`particle_arrays`] as point data.
+pub fn particles_vtp<T: Real>(
+    stamp: &Stamp,
+    w: &DemWorld<T>,
+    fluid: Option<&[([f64; 2], f64)]>,
+) -> Vec<u8> {
+    let points = particle_points(stamp, w);
     polydata(
         stamp,
         &points,
@@ -742,16 +746,7 @@ pub fn bond_arrays<T: Real>(w: &DemWorld<T>, clock: BreakClock, units: &Units) -
 /// Every bond as a line between its two grain centres (`.vtp`), [`bond_arrays`] as cell data, the grain `id`
 /// as point data.
 pub fn bonds_vtp<T: Real>(stamp: &Stamp, w: &DemWorld<T>, clock: BreakClock) -> Vec<u8> {
-    let points: Vec<[f64; 2]> = w
-        .particles
-        .iter()
-        .map(|p| {
-            [
-                p.position[0].to_f64_exact() * stamp.units.scale.length,
-                p.position[1].to_f64_exact() * stamp.units.scale.length,
-            ]
-        })
-        .collect();
+    let points = particle_points(stamp, w);
     let pairs: Vec<[usize; 2]> = w.bonds.iter().map(|b| b.pair).collect();
     let ids = Array::new("id", 1, "", Values::I64((0..points.len() as i64).collect()));
     polydata(

@@ -5,8 +5,18 @@
 use serde::de::DeserializeOwned;
 use serde::{Deserialize, Serialize};
 
+use std::time::Instant;
+
+use lbdem_kernels::Real;
+
 use crate::engine::exec::Exec;
+use crate::engine::lattice::FluidLattice;
 use crate::error::Result;
+use crate::observe::health::fluid_health;
+
+/// What a diverging steady-flow case suggests (its health check, and its steady-state loop's divergence check).
+pub const DRIVE_HINT: &str =
+    "lower the drive (acceleration, Reynolds number or pressure drop), raise tau, or refine";
 
 /// One case in progress.
 pub trait CaseRun: Sized {
@@ -14,22 +24,43 @@ pub trait CaseRun: Sized {
     type Case;
     /// What it measured.
     type Outcome: Clone;
+    /// The precision of its lattice.
+    type Float: Real;
     /// The case at its start.
     fn start(case: &Self::Case, exec: &Exec) -> Result<Self>;
     /// One chunk (a check interval); whether the case is over.
     fn advance(&mut self, case: &Self::Case) -> Result<bool>;
     /// The measurements of the case as it stands.
     fn outcome(&self, case: &Self::Case) -> Self::Outcome;
-    /// Steps done in this case.
-    fn steps(&self) -> u64;
+    /// The case's lattice.
+    fn lattice(&self) -> &FluidLattice<Self::Float>;
+    /// The case's lattice, to change its execution settings.
+    fn lattice_mut(&mut self) -> &mut FluidLattice<Self::Float>;
     /// Steps a finished case took.
     fn outcome_steps(outcome: &Self::Outcome) -> u64;
-    /// Health of the case after a chunk.
-    fn health(&self) -> Result<()>;
-    /// Use this process's execution settings (after a resume).
-    fn apply(&mut self, exec: &Exec);
     /// One line on a finished case, for the log.
     fn report(case: &Self::Case, outcome: &Self::Outcome) -> String;
+    /// Steps done in this case.
+    fn steps(&self) -> u64 {
+        self.lattice().steps()
+    }
+    /// Health of the case after a chunk.
+    fn health(&self) -> Result<()> {
+        fluid_health(self.lattice(), DRIVE_HINT)
+    }
+    /// Use this process's execution settings (after a resume).
+    fn apply(&mut self, exec: &Exec) {
+        exec.apply(self.lattice_mut());
+    }
+}
+
+/// One case run to its end in memory (no checkpoint, no health check between chunks): its outcome and the wall
+/// time it took in seconds.
+pub fn solve<R: CaseRun>(case: &R::Case, exec: &Exec) -> Result<(R::Outcome, f64)> {
+    let start = Instant::now();
+    let mut run = R::start(case, exec)?;
+    while !run.advance(case)? {}
+    Ok((run.outcome(case), start.elapsed().as_secs_f64()))
 }
 
 /// The finished cases and the one in progress.

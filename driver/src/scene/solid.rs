@@ -119,7 +119,6 @@ pub struct SolidSection {
     pub bonds: Option<BondsSection>,
 }
 
-/// Range checks of `[packing]` and `[solid]`, naming the field (shared by every scene that packs grains).
 /// An upper bound on the grains of a packing (box area × solid fraction over the area of the smallest grain),
 /// computed before packing and refused above [`limits::MAX_GRAINS`] naming `packing.width`.
 pub fn grain_count(p: &PackingSection) -> Result<u64> {
@@ -133,6 +132,19 @@ pub fn grain_count(p: &PackingSection) -> Result<u64> {
     limits::grains("packing.width", n)
 }
 
+/// The memory budget of a packing: its grains ([`grain_count`]), named `packing.width`.
+pub fn packing_budget(p: &PackingSection) -> Result<limits::Budget> {
+    let mut b = limits::Budget::new();
+    b.add_items(
+        "grains",
+        "packing.width",
+        grain_count(p)?,
+        limits::GRAIN_BYTES,
+    )?;
+    Ok(b)
+}
+
+/// Range checks of `[packing]` and `[solid]`, naming the field (shared by every scene that packs grains).
 pub fn validate_packing_and_solid(p: &PackingSection, s: &SolidSection) -> Result<()> {
     positive("packing.width", p.width, "box width along x")?;
     positive("packing.height", p.height, "box height along y")?;

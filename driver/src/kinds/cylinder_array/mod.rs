@@ -21,7 +21,6 @@
 //! Everything here is in lattice units (h = Δt = 1, ρ₀ = 1); [`ArraySetup`] converts a scene in physical units
 //! through [`crate::units`].
 use std::path::Path;
-use std::time::Instant;
 
 use lbdem_kernels::fluid::boundary::Boundaries;
 use lbdem_kernels::fluid::collide::{Collision, SolidOperator};
@@ -38,10 +37,9 @@ use crate::error::{LbdemError, Result};
 use crate::input::limits::{self, Budget};
 use crate::observe::darcy::SteadyFlow;
 use crate::observe::flow::max_mach;
-use crate::observe::health::fluid_health;
 use crate::observe::steady::Steadiness;
 use crate::output::{csv, write_atomic};
-use crate::run::cases::{CaseRun, Sweep};
+use crate::run::cases::{solve, CaseRun, Sweep, DRIVE_HINT};
 use crate::run::{Case, Kind, OutputStage};
 use crate::scene::{whole_spacings, RunSection, SceneHeader};
 use crate::units::{
@@ -197,12 +195,13 @@ pub struct ArrayRun<T: Real> {
     flow: SteadyFlow,
 }
 
-const HINT: &str =
-    "lower the drive (acceleration, Reynolds number or pressure drop), raise tau, or refine";
+impl<T: Real> CaseRun for ArrayRun<T> {
+    type Case = ArrayCase;
+    type Outcome = ArrayOutcome;
+    type Float = T;
 
-impl<T: Real> ArrayRun<T> {
     /// The cell of `case`, at rest.
-    pub fn new(case: &ArrayCase, exec: &Exec) -> Result<Self> {
+    fn start(case: &ArrayCase, exec: &Exec) -> Result<Self> {
         let l = case.cell;
         let bc = Boundaries::<T>::periodic();
         let params = FluidParams {
@@ -237,7 +236,7 @@ impl<T: Real> ArrayRun<T> {
     }
 
     /// One check interval towards steady state (superficial velocity); whether the case is over.
-    pub fn advance(&mut self, case: &ArrayCase) -> Result<bool> {
+    fn advance(&mut self, case: &ArrayCase) -> Result<bool> {
         let (eps, l) = (&self.eps, case.cell);
         let superficial = |lattice: &FluidLattice<T>| -> f64 {
             let (_, u) = lattice.moments();
@@ -247,11 +246,12 @@ impl<T: Real> ArrayRun<T> {
                 .sum::<f64>()
                 / (l * l) as f64
         };
-        self.flow.advance(&mut self.lattice, superficial, HINT)
+        self.flow
+            .advance(&mut self.lattice, superficial, DRIVE_HINT)
     }
 
     /// The measured drag and its comparison with S&A.
-    pub fn outcome(&self, case: &ArrayCase) -> ArrayOutcome {
+    fn outcome(&self, case: &ArrayCase) -> ArrayOutcome {
         let l = case.cell;
         let lattice = &self.lattice;
         let eps = &self.eps;
@@ -297,32 +297,19 @@ impl<T: Real> ArrayRun<T> {
             wall_seconds: 0.0,
         }
     }
-}
 
-impl<T: Real> CaseRun for ArrayRun<T> {
-    type Case = ArrayCase;
-    type Outcome = ArrayOutcome;
-    fn start(case: &ArrayCase, exec: &Exec) -> Result<Self> {
-        Self::new(case, exec)
+    fn lattice(&self) -> &FluidLattice<T> {
+        &self.lattice
     }
-    fn advance(&mut self, case: &ArrayCase) -> Result<bool> {
-        ArrayRun::advance(self, case)
+
+    fn lattice_mut(&mut self) -> &mut FluidLattice<T> {
+        &mut self.lattice
     }
-    fn outcome(&self, case: &ArrayCase) -> ArrayOutcome {
-        ArrayRun::outcome(self, case)
-    }
-    fn steps(&self) -> u64 {
-        self.lattice.steps()
-    }
+
     fn outcome_steps(o: &ArrayOutcome) -> u64 {
         o.steps
     }
-    fn health(&self) -> Result<()> {
-        fluid_health(&self.lattice, HINT)
-    }
-    fn apply(&mut self, exec: &Exec) {
-        exec.apply(&mut self.lattice);
-    }
+
     fn report(case: &ArrayCase, o: &ArrayOutcome) -> String {
         format!(
             "c = {} l = {}: F/(muU) = {:.3} (S&A {:?}), Re = {:.3e}, {} steps",
@@ -338,11 +325,8 @@ pub fn solve_array<T: Real>(case: &ArrayCase) -> Result<ArrayOutcome> {
 
 /// [`solve_array`] with the given execution settings (speed only).
 pub fn solve_array_with<T: Real>(case: &ArrayCase, exec: &Exec) -> Result<ArrayOutcome> {
-    let start = Instant::now();
-    let mut run = ArrayRun::<T>::new(case, exec)?;
-    while !run.advance(case)? {}
-    let mut outcome = run.outcome(case);
-    outcome.wall_seconds = start.elapsed().as_secs_f64();
+    let (mut outcome, seconds) = solve::<ArrayRun<T>>(case, exec)?;
+    outcome.wall_seconds = seconds;
     Ok(outcome)
 }
 
@@ -633,10 +617,7 @@ impl Kind for CylinderArray {
 
     fn describe(case: &Case<Self>) -> String {
         let u = &case.setup.units;
-        let mut s = format!(
-            "  spacing h {:.6e}, time step {:.6e}, tau {:.6}, lattice viscosity {:.6}\n",
-            u.spacing, u.timestep, u.tau, u.lattice_viscosity
-        );
+        let mut s = u.brief();
         for c in &case.setup.cases {
             s += &format!(
                 "  cell {} nodes, c = {}, D = {:.2}, gap {:.2} nodes, tau {:.4}, force {:.4e}\n",

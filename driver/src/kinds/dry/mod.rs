@@ -51,13 +51,13 @@ use crate::engine::dem::staged::{BoundaryStressRun, CompressionRun};
 use crate::engine::dem::world::{DemWorld, CRITICAL_STEP_SAFETY};
 use crate::engine::exec::Exec;
 use crate::error::{non_negative, positive, LbdemError, Result};
-use crate::input::limits::{Budget, GRAIN_BYTES};
+use crate::input::limits::Budget;
 use crate::observe::health::dem_health;
 use crate::output::snapshots::write_series;
 use crate::output::vtk::{BreakClock, Stamp, Units};
 use crate::output::{csv, write_atomic};
 use crate::run::{Case, Kind, OutputStage, Persist};
-use crate::scene::solid::grain_count;
+use crate::scene::solid::packing_budget;
 use crate::scene::solid::{
     bond_spec, critical_time_step, packing_spec, validate_packing_and_solid, PackingSection,
     SolidSection,
@@ -516,14 +516,7 @@ impl Kind for Dry {
     }
 
     fn budget(scene: &DryScene, _setup: &DrySetup) -> Result<Budget> {
-        let mut b = Budget::new();
-        b.add_items(
-            "grains",
-            "packing.width",
-            grain_count(&scene.packing)?,
-            GRAIN_BYTES,
-        )?;
-        Ok(b)
+        packing_budget(&scene.packing)
     }
 
     fn setup(scene: &DryScene) -> Result<DrySetup> {

@@ -142,15 +142,7 @@ pub fn snapshot_png(
         chart.draw_series(cells)?;
     }
     let polygons = w.particles.iter().enumerate().map(|(k, p)| {
-        let (a, b) = p.shape.semi_axes();
-        let (c, s) = (p.angle.cos(), p.angle.sin());
-        let pts: Vec<(f64, f64)> = (0..20)
-            .map(|m| {
-                let t = m as f64 * std::f64::consts::TAU / 20.0;
-                let (u, v) = (a * t.cos(), b * t.sin());
-                (p.position[0] + u * c - v * s, p.position[1] + u * s + v * c)
-            })
-            .collect();
+        let pts = outline(p, 20);
         Polygon::new(
             pts,
             damage_colour(broken_fraction.get(k).copied().unwrap_or(0.0)).filled(),
@@ -212,15 +204,7 @@ pub fn speed_png(path: &Path, w: &DemWorld<f64>, time: f64, velocity_unit: &str)
         .build_cartesian_2d(x0..x1, y0..y1)?;
     chart.configure_mesh().disable_mesh().draw()?;
     let polygons = w.particles.iter().zip(&speed).map(|(p, &v)| {
-        let (a, b) = p.shape.semi_axes();
-        let (c, s) = (p.angle.cos(), p.angle.sin());
-        let pts: Vec<(f64, f64)> = (0..24)
-            .map(|m| {
-                let t = m as f64 * std::f64::consts::TAU / 24.0;
-                let (u, v) = (a * t.cos(), b * t.sin());
-                (p.position[0] + u * c - v * s, p.position[1] + u * s + v * c)
-            })
-            .collect();
+        let pts = outline(p, 24);
         Polygon::new(pts, colormap(v / scale).filled())
     });
     chart.draw_series(polygons)?;
@@ -407,4 +391,17 @@ pub fn breaks_png(path: &Path, series: &[(String, Vec<(f64, f64)>)]) -> FigureRe
     root.present()?;
     crate::output::record_output(path)?;
     Ok(())
+}
+
+/// `n` points on the boundary of grain `p` (an ellipse of its semi-axes at its angle), for drawing.
+fn outline(p: &lbdem_kernels::dem::shape::Particle<f64>, n: usize) -> Vec<(f64, f64)> {
+    let (a, b) = p.shape.semi_axes();
+    let (c, s) = (p.angle.cos(), p.angle.sin());
+    (0..n)
+        .map(|m| {
+            let t = m as f64 * std::f64::consts::TAU / n as f64;
+            let (u, v) = (a * t.cos(), b * t.sin());
+            (p.position[0] + u * c - v * s, p.position[1] + u * s + v * c)
+        })
+        .collect()
 }

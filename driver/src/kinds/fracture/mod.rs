@@ -41,7 +41,7 @@ use crate::engine::dem::world::{DemWorld, PlatenControl, SampleBox, CRITICAL_STE
 use crate::engine::exec::{Exec, ExecTarget};
 use crate::engine::lattice::FluidLattice;
 use crate::error::{positive, LbdemError, Result};
-use crate::input::limits::{self, Budget, GRAIN_BYTES};
+use crate::input::limits::{self, Budget};
 use crate::observe::darcy::{permeability, SteadyFlow};
 use crate::observe::fit::fit_diffusivity;
 use crate::observe::health::dem_health;
@@ -50,7 +50,7 @@ use crate::output::snapshots::write_series;
 use crate::output::vtk::{lattice_field, BreakClock, LatticeFrame, Stamp, Units};
 use crate::output::{csv, write_atomic, SCENE_COPY};
 use crate::run::{Case, Kind, OutputStage, Persist};
-use crate::scene::solid::grain_count;
+use crate::scene::solid::packing_budget;
 use crate::scene::solid::{
     bond_spec, critical_time_step, packing_spec, validate_packing_and_solid, PackingSection,
     SolidSection,
@@ -1489,13 +1489,7 @@ impl Kind for FractureTest {
     }
 
     fn budget(scene: &FractureScene, setup: &FractureSetup) -> Result<Budget> {
-        let mut b = Budget::new();
-        b.add_items(
-            "grains",
-            "packing.width",
-            grain_count(&scene.packing)?,
-            GRAIN_BYTES,
-        )?;
+        let mut b = packing_budget(&scene.packing)?;
         // Settling steps before the loading (the loading steps are checked in `setup`).
         let settle = limits::count(
             "loading.settle_time",

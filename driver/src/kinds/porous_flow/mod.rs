@@ -18,7 +18,6 @@
 //! Everything here is in lattice units (h = Δt = 1, ρ₀ = 1); [`PorousSetup`] converts a scene in physical units
 //! through [`crate::units`].
 use std::path::Path;
-use std::time::Instant;
 
 use lbdem_kernels::fluid::boundary::{Boundaries, SideCondition};
 use lbdem_kernels::fluid::collide::{Collision, SolidOperator};
@@ -38,10 +37,9 @@ use crate::input::limits::{self, Budget};
 use crate::observe::darcy::{permeability, SteadyFlow};
 use crate::observe::fit::linear_fit;
 use crate::observe::flow::max_mach;
-use crate::observe::health::fluid_health;
 use crate::observe::steady::Steadiness;
 use crate::output::{csv, write_atomic};
-use crate::run::cases::{CaseRun, Sweep};
+use crate::run::cases::{solve, CaseRun, Sweep, DRIVE_HINT};
 use crate::run::{Case, Kind, OutputStage};
 use crate::scene::{whole_spacings, Precision, RunSection, SceneHeader};
 use crate::units::{
@@ -251,12 +249,13 @@ pub struct PorousRun<T: Real> {
     flow: SteadyFlow,
 }
 
-const HINT: &str =
-    "lower the drive (acceleration, Reynolds number or pressure drop), raise tau, or refine";
+impl<T: Real> CaseRun for PorousRun<T> {
+    type Case = PorousCase;
+    type Outcome = PorousOutcome;
+    type Float = T;
 
-impl<T: Real> PorousRun<T> {
     /// The slab of `case`, starting from the linear pressure profile at rest.
-    pub fn new(case: &PorousCase, exec: &Exec) -> Result<Self> {
+    fn start(case: &PorousCase, exec: &Exec) -> Result<Self> {
         let (nx, ny) = case.size();
         let (rin, rout) = (1.0 + 0.5 * case.density_drop, 1.0 - 0.5 * case.density_drop);
         let ns = if case.walls {
@@ -303,7 +302,7 @@ impl<T: Real> PorousRun<T> {
     }
 
     /// One check interval towards steady state (superficial flux through the array); whether the case is over.
-    pub fn advance(&mut self, case: &PorousCase) -> Result<bool> {
+    fn advance(&mut self, case: &PorousCase) -> Result<bool> {
         let (nx, ny) = case.size();
         let (x_a, l) = (case.array_start(), case.pitch);
         let x_b = x_a + case.columns * l;
@@ -320,11 +319,11 @@ impl<T: Real> PorousRun<T> {
             }
             q / area
         };
-        self.flow.advance(&mut self.lattice, flux, HINT)
+        self.flow.advance(&mut self.lattice, flux, DRIVE_HINT)
     }
 
     /// Permeability, Kozeny constant and the other figures of the steady flow.
-    pub fn outcome(&self, case: &PorousCase) -> PorousOutcome {
+    fn outcome(&self, case: &PorousCase) -> PorousOutcome {
         let lattice = &self.lattice;
         let eps = &self.eps;
         let q = self.flow.flux;
@@ -395,32 +394,19 @@ impl<T: Real> PorousRun<T> {
             wall_seconds: 0.0,
         }
     }
-}
 
-impl<T: Real> CaseRun for PorousRun<T> {
-    type Case = PorousCase;
-    type Outcome = PorousOutcome;
-    fn start(case: &PorousCase, exec: &Exec) -> Result<Self> {
-        Self::new(case, exec)
+    fn lattice(&self) -> &FluidLattice<T> {
+        &self.lattice
     }
-    fn advance(&mut self, case: &PorousCase) -> Result<bool> {
-        PorousRun::advance(self, case)
+
+    fn lattice_mut(&mut self) -> &mut FluidLattice<T> {
+        &mut self.lattice
     }
-    fn outcome(&self, case: &PorousCase) -> PorousOutcome {
-        PorousRun::outcome(self, case)
-    }
-    fn steps(&self) -> u64 {
-        self.lattice.steps()
-    }
+
     fn outcome_steps(o: &PorousOutcome) -> u64 {
         o.steps
     }
-    fn health(&self) -> Result<()> {
-        fluid_health(&self.lattice, HINT)
-    }
-    fn apply(&mut self, exec: &Exec) {
-        exec.apply(&mut self.lattice);
-    }
+
     fn report(case: &PorousCase, o: &PorousOutcome) -> String {
         format!(
             "D = {:.2} drho = {:.2e}: q = {:.4e}, k = {:.4e}, c_K = {:.2}, {} steps",
@@ -436,11 +422,8 @@ impl<T: Real> CaseRun for PorousRun<T> {
 
 /// Run one porous slab to steady state.
 pub fn solve_porous<T: Real>(case: &PorousCase) -> Result<PorousOutcome> {
-    let start = Instant::now();
-    let mut run = PorousRun::<T>::new(case, &Exec::default())?;
-    while !run.advance(case)? {}
-    let mut outcome = run.outcome(case);
-    outcome.wall_seconds = start.elapsed().as_secs_f64();
+    let (mut outcome, seconds) = solve::<PorousRun<T>>(case, &Exec::default())?;
+    outcome.wall_seconds = seconds;
     Ok(outcome)
 }
 
@@ -791,10 +774,7 @@ impl Kind for PorousFlow {
 
     fn describe(case: &Case<Self>) -> String {
         let u = &case.setup.units;
-        let mut s = format!(
-            "  spacing h {:.6e}, time step {:.6e}, tau {:.6}, lattice viscosity {:.6}\n",
-            u.spacing, u.timestep, u.tau, u.lattice_viscosity
-        );
+        let mut s = u.brief();
         for c in &case.setup.cases {
             let (nx, ny) = c.size();
             s += &format!(
