@@ -288,6 +288,19 @@ fn start(case: &Case<PressureDiffusion>, exec: &Exec) -> Result<DiffusionState> 
 /// run: the Darcy run before it needs of the order of L²/c steps to become steady, and is capped at
 /// `DARCY_MAX_STEPS`, while the refusal needs Fo L²/c > 10⁹ with Fo ≤ 10).
 fn drainage_steps(fourier_times: &[f64], half_length: f64, c_geo: f64) -> Result<Vec<u64>> {
+    // A diffusivity that is not a positive finite number (a pack that blocks the flow, a reversed or non-finite
+    // flux) would turn every drainage time into 1 step (NaN and negative products clamp to 1) and the run would
+    // report a fit of nothing: refused here, before any drainage step.
+    if !(c_geo.is_finite() && c_geo > 0.0) {
+        return Err(LbdemError::field(
+            "pressure_diffusion",
+            format!("{c_geo:e}"),
+            "the Darcy run measured a diffusivity k c_s^2/(nu n) that is not a positive finite number (nodes^2/step), \
+             so the drainage times cannot be set",
+            "the pack must leave a connected path for the fluid between the two faces: lower \
+             pressure_diffusion.fluid_radius (or fewer, smaller grains)",
+        ));
+    }
     let fourier_unit = half_length * half_length / c_geo;
     let mut times: Vec<u64> = fourier_times
         .iter()
@@ -736,5 +749,18 @@ mod tests {
         );
         // A pack that blocks the flow (c = 0) needs unboundedly many steps: refused, not run for ever.
         assert!(drainage_steps(&[0.1], 60.0, 0.0).is_err());
+    }
+
+    #[test]
+    fn a_diffusivity_that_is_not_positive_and_finite_is_refused_not_run_in_one_step() {
+        // Negative, NaN and infinite diffusivities once each became one drainage step per time (the products clamp
+        // to 1), and the run went on without an error.
+        for c in [-0.5, f64::NAN, f64::INFINITY, 0.0] {
+            let e = drainage_steps(&[0.1, 1.0], 60.0, c)
+                .expect_err("refused")
+                .to_string();
+            assert!(e.contains("pressure_diffusion"), "c = {c}: {e}");
+            assert!(e.contains("not a positive finite number"), "c = {c}: {e}");
+        }
     }
 }
