@@ -423,7 +423,7 @@ fn compute_links<T: Real>(
         for s in &cov.shares[cov.offsets[k] as usize..cov.offsets[k + 1] as usize] {
             eps += s.fraction;
         }
-        eps >= T::one()
+        lbdem_kernels::fluid::collide::lambda_fully_covered(eps)
     };
     // Each node's test in parallel, the per-node map filled in node order, then each node's links in parallel
     // (each depends on the map only).
@@ -1121,6 +1121,32 @@ impl<T: Real> FluidLattice<T> {
             }
         }
         eps
+    }
+
+    /// The shares of node (x, y) from the current coverage, in the order the collision takes them: the owning
+    /// body's index, its cell fraction and its rigid velocity at the node (lattice units), with the node's ΩΛ
+    /// open-link mask (bits 1–8; [`lbdem_kernels::fluid::collide::ALL_LINKS_OPEN`] under the other operators).
+    /// Empty for an uncovered node. For diagnostics (`examples/omega_probe.rs`); read-only.
+    pub fn node_shares(&self, x: usize, y: usize) -> (Vec<(u32, f64, [f64; 2])>, u16) {
+        let Some(c) = &self.coverage else {
+            return (Vec::new(), 0);
+        };
+        let node = (y * self.shape.nx + x) as u32;
+        let Some(k) = c.nodes.iter().position(|&n| n == node) else {
+            return (Vec::new(), 0);
+        };
+        let (a, b) = (c.offsets[k] as usize, c.offsets[k + 1] as usize);
+        let shares = (a..b)
+            .map(|j| {
+                let s = &c.shares[j];
+                (
+                    c.owners[j],
+                    s.fraction.to_f64_exact(),
+                    [s.velocity[0].to_f64_exact(), s.velocity[1].to_f64_exact()],
+                )
+            })
+            .collect();
+        (shares, c.links.get(k).copied().unwrap_or(0))
     }
 
     /// Number of nodes covered (partly or wholly) by solids.

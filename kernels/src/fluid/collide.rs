@@ -245,6 +245,28 @@ pub const ALL_LINKS_OPEN: OpenLinks = 0x1fe;
 /// fixed κ) is of the size of κ's effect, which is why a single calibration case is not trusted here.
 pub const LAMBDA_FRICTION: f64 = 1.27;
 
+/// ΩΛ treats a node as fully covered when its summed fraction is at least 1 − this gap (see
+/// [`lambda_fully_covered`]).
+///
+/// **Why (measured, not derived; no paper gives it).** ΩΛ's partly-covered rule does not tend to its
+/// fully-covered rule as ε → 1: with B → 1 the local rates go to ω⁺ → 0 and ω⁻ → 2 (Λ⁺/(1 − B) and
+/// Λ⁻(1 − B)), so the node bounces every link back with its own trapezoidal velocity u*, damps its
+/// non-hydrodynamic modes only in proportion to 1 − B, and stays tied to the solid only by the bounded friction
+/// β = κΛ⁺B. A free grain leaving such a node 1 − ε ≲ 3e-4 short of full cover went into a period-2
+/// oscillation (its velocity and spin flipping sign every step) that grew by ≈ 0.5 % per step until the
+/// run diverged: the `terzaghi` column under ΩΛ (grain 48, node (27, 14), growth from step ≈ 4000 once
+/// 1 − ε fell from 5e-4 to 3e-4; holding that grain alone kept the run bounded) and a single free rock
+/// grain in a periodic box (1 − ε = 4.2e-5, 2.2e-5, 1.3e-6 diverged; 1.4e-4, 3.4e-4 did not;
+/// `driver/tests/omega_grain.rs`, `driver/examples/omega_probe.rs`). 1e-3 is three times the largest
+/// unstable gap measured; the nodes it moves to the full rule are covered to within 0.1 % of their area.
+pub const LAMBDA_FULL_GAP: f64 = 1e-3;
+
+/// Whether ΩΛ treats a node whose fractions sum to `eps_sum` as fully covered: ε ≥ 1 − [`LAMBDA_FULL_GAP`].
+#[inline(always)]
+pub fn lambda_fully_covered<T: Real>(eps_sum: T) -> bool {
+    eps_sum >= T::one() - T::lit(LAMBDA_FULL_GAP)
+}
+
 /// The PSM weight B for a (capped) solid fraction `eps` ∈ [0, 1] and relaxation time `tau`.
 #[inline(always)]
 pub fn weighting<T: Real>(kind: Weighting, eps: T, tau: T) -> T {
@@ -777,7 +799,7 @@ pub fn lambda_weighting<T: Real>(kind: Weighting, eps: T, rates: Rates<T>) -> T 
 /// effective solid surface moves with τ (Pan, Luo & Miller 2006, Comput. Fluids 35:898, for bounce-back).
 ///
 /// **ΩΛ** restores the three scalings (this crate's construction; the parts are published):
-/// * partly covered node (0 < ε < 1), weight B = [`lambda_weighting`]: TRT with Λ⁺_loc = Λ⁺/(1 − B) (the
+/// * partly covered node (0 < ε < 1 − [`LAMBDA_FULL_GAP`]), weight B = [`lambda_weighting`]: TRT with Λ⁺_loc = Λ⁺/(1 − B) (the
 ///   viscosity of a fluid layer of thickness 1 − B carrying the cell's shear, ν/(1 − B)) and
 ///   Λ⁻_loc = Λ⁻(1 − B) (so Λ⁺_loc Λ⁻_loc = Λ), plus a Brinkman friction F_s = −β_s ρ (u* − u_s) towards
 ///   each solid, β_s = κ Λ⁺ B ε_s/Σε ([`LAMBDA_FRICTION`] κ; Λ⁺ = τ⁺ − ½ = 3ν, the scaling of the
@@ -787,7 +809,8 @@ pub fn lambda_weighting<T: Real>(kind: Weighting, eps: T, rates: Rates<T>) -> T 
 ///   The body force is weighted by 1 − B. In a planar shear layer with κ = 0 the wall sits exactly at its
 ///   geometric position (ε of the cell on the solid side) at every τ; the friction adds the resistance to
 ///   flow across partly covered cells;
-/// * fully covered node (ε ≥ 1): the populations that arrived from neighbours that are not fully covered
+/// * fully covered node (ε ≥ 1 − [`LAMBDA_FULL_GAP`]): the populations that arrived from neighbours that are
+///   not fully covered
 ///   (`open` links) are bounced back with the solid velocity, f_i ← f_ī + 6 w_i ρ c_i·u_s (Ladd 1994,
 ///   J. Fluid Mech. 271:285: half-way bounce-back, exact at Λ = 3/16 for a planar wall at every τ); the
 ///   populations from fully covered neighbours are replaced by the solid's equilibrium shape over those
@@ -810,7 +833,7 @@ fn lambda_collide<T: Real>(
     exchange: &mut [[T; 2]],
 ) -> T {
     let rho = density(f);
-    if eps_sum >= T::one() {
+    if lambda_fully_covered(eps_sum) {
         let w = weights::<T>();
         let mut post = [T::zero(); Q];
         for (share, ex) in shares.iter().zip(exchange.iter_mut()) {
@@ -933,7 +956,7 @@ pub fn psm_velocity<T: Real>(
         return macroscopic(f, params.force);
     }
     let rho = density(f);
-    if eps_sum >= T::one() {
+    if lambda_fully_covered(eps_sum) {
         let mut u = [T::zero(); 2];
         for s in shares {
             let b = s.fraction / eps_sum;

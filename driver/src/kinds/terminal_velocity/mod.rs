@@ -182,7 +182,14 @@ pub fn fluid_weight(
     match (op, collision.rates(tau)) {
         (SolidOperator::LambdaConsistent, Ok(rates)) => eps
             .iter()
-            .map(|&e| 1.0 - lambda_weighting(wf, e, rates))
+            .map(|&e| {
+                // ΩΛ's fully covered nodes (ε ≥ 1 − LAMBDA_FULL_GAP) take no body force.
+                if lbdem_kernels::fluid::collide::lambda_fully_covered(e) {
+                    0.0
+                } else {
+                    1.0 - lambda_weighting(wf, e, rates)
+                }
+            })
             .sum(),
         _ => eps.iter().map(|&e| 1.0 - weighting(wf, e, tau)).sum(),
     }

@@ -468,6 +468,19 @@ fn start(case: &Case<Terzaghi>, exec: &Exec) -> Result<TerzaghiState> {
 }
 
 impl TerzaghiState {
+    /// The coupled world, for diagnostics (`examples/omega_probe.rs`): stepping it directly bypasses the
+    /// kind's records.
+    #[doc(hidden)]
+    pub fn world_mut(&mut self) -> &mut CoupledWorld {
+        &mut self.world
+    }
+
+    /// Whether the Darcy measurement is over and the step load is on (the coupled consolidation has begun).
+    #[doc(hidden)]
+    pub fn loaded(&self) -> bool {
+        self.darcy.is_none()
+    }
+
     /// The next VTK snapshot (grains, bonds if any, lattice with the pore pressure above the drained top).
     fn snapshot(&mut self, case: &Case<Terzaghi>, dir: &Path, every: u64) -> Result<()> {
         let h = &case.scene.scene;
