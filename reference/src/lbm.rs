@@ -355,15 +355,20 @@ pub fn psm_with_collision(
 /// ΩΛ's friction constant κ (`lbdem_kernels::fluid::collide::LAMBDA_FRICTION`, restated).
 pub const LAMBDA_FRICTION: f64 = 1.27;
 
+/// ΩΛ's full-cover threshold: a node whose fractions sum to at least 1 − this gap takes the fully covered rule
+/// (the operator's definition, fixed at 1e-3 where the partly covered rule was measured to destabilise a free
+/// grain: lbdem-kernels `fluid::collide::LAMBDA_FULL_GAP`, whose doc gives the measurements).
+pub const LAMBDA_FULL_GAP: f64 = 1e-3;
+
 /// The magic-parameter-consistent partially saturated collision ΩΛ of one node (see the kernels'
 /// `lambda_collide` for the derivation), written from its definition. `magic` = `None` is BGK (Λ⁻ = Λ⁺);
 /// `open[i]` tells whether the neighbour x + c_i is not fully covered (read at fully covered nodes only).
 ///
 /// * Σ ε_s ≤ 0: the fluid collision.
-/// * Σ ε_s ≥ 1: for each solid s, P_i = f_ī + 6 w_i ρ c_i·u_s on open links; the other directions (the rest
+/// * Σ ε_s ≥ 1 − [`LAMBDA_FULL_GAP`]: for each solid s, P_i = f_ī + 6 w_i ρ c_i·u_s on open links; the other directions (the rest
 ///   direction among them) get the remaining mass ρ − Σ_open P_i in proportion to f^eq(1, u_s); the node takes
 ///   Σ_s (ε_s/Σε) P_s and solid s receives −(ε_s/Σε) Σ_i c_i (P_{s,i} − f_i).
-/// * otherwise, with Λ⁺ = τ − ½, Λ⁻ = τ⁻ − ½, B = ε (or ε√(Λ⁺Λ⁻)/((1 − ε) + √(Λ⁺Λ⁻)) for the NT weighting):
+/// * otherwise (0 < Σ ε_s < 1 − [`LAMBDA_FULL_GAP`]), with Λ⁺ = τ − ½, Λ⁻ = τ⁻ − ½, B = ε (or ε√(Λ⁺Λ⁻)/((1 − ε) + √(Λ⁺Λ⁻)) for the NT weighting):
 ///   TRT with τ⁺_loc = ½ + Λ⁺/(1 − B), τ⁻_loc = ½ + Λ⁻(1 − B) and the force F = (1 − B) F_body + Σ_s F_s,
 ///   F_s = −κ Λ⁺ B (ε_s/Σε) ρ (u − u_s), u the velocity of that forced collision, u = (Σ f c + F/2)/ρ (solved:
 ///   u (1 + κΛ⁺B/2) = (Σ f c + (1 − B) F_body/2)/ρ + Σ_s κΛ⁺B (ε_s/Σε) u_s/2); solid s receives −F_s.
@@ -384,7 +389,7 @@ pub fn psm_lambda(
         );
     }
     let rho = density(f);
-    if eps >= 1.0 {
+    if eps >= 1.0 - LAMBDA_FULL_GAP {
         let mut out = [0.0; Q];
         let mut exchange = Vec::new();
         for s in solids {
@@ -929,7 +934,8 @@ pub fn step_with_profiles(
     let mut forces = Vec::with_capacity(covered.len());
     let mut full = vec![false; lat.f.len()];
     for cov in covered {
-        full[cov.node] = cov.solids.iter().map(|s| s.fraction).sum::<f64>() >= 1.0;
+        full[cov.node] =
+            cov.solids.iter().map(|s| s.fraction).sum::<f64>() >= 1.0 - LAMBDA_FULL_GAP;
     }
     for cov in covered {
         if lat.solid[cov.node] {

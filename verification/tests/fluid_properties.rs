@@ -671,14 +671,15 @@ fn kernel_step<T: Real>(
         }));
         offsets.push(shares.len() as u32);
     }
-    // Open links (ΩΛ): fully covered = the shares' fractions, summed in the collision's order, reach 1.
+    // Open links (ΩΛ): fully covered = the shares' fractions, summed in the collision's order, reach 1 − the
+    // full-cover gap (the operator's definition; the reference's constant).
     let mut full = vec![false; shape.nodes()];
     for (k, &n) in nodes.iter().enumerate() {
         let mut eps = T::zero();
         for s in &shares[offsets[k] as usize..offsets[k + 1] as usize] {
             eps += s.fraction;
         }
-        full[n as usize] = eps >= T::one();
+        full[n as usize] = eps >= T::one() - T::lit(lbdem_reference::lbm::LAMBDA_FULL_GAP);
     }
     let links: Vec<OpenLinks> = nodes
         .iter()
@@ -1625,7 +1626,7 @@ proptest! {
         let eps: f64 = shares.iter().map(|s| s.fraction).sum();
         prop_assert_eq!(rho, density(&f));
         let tol = ROUNDOFF * scale(&f);
-        if eps >= 1.0 {
+        if eps >= 1.0 - lbdem_reference::lbm::LAMBDA_FULL_GAP {
             for (a, ua) in u.iter().enumerate() {
                 let want: f64 = shares.iter().map(|s| s.fraction / eps * s.velocity[a]).sum();
                 prop_assert!((ua - want).abs() <= tol);
