@@ -14,31 +14,55 @@ use lbdem::engine::exec::Exec;
 use lbdem::kinds::terzaghi::Terzaghi;
 use lbdem::run::{Case, Kind};
 
+/// Print `msg` and exit with status 2 (bad arguments or scene).
+fn fail(msg: &str) -> ! {
+    eprintln!("omega_probe: {msg}");
+    std::process::exit(2)
+}
+
+/// `args[i]` parsed, or `default` when absent; [`fail`] when it does not parse.
+fn arg<T: std::str::FromStr>(args: &[String], i: usize, name: &str, default: T) -> T {
+    match args.get(i) {
+        None => default,
+        Some(s) => s
+            .parse()
+            .unwrap_or_else(|_| fail(&format!("{name} `{s}` is not a valid value"))),
+    }
+}
+
 fn main() {
     let a: Vec<String> = std::env::args().collect();
-    let path = a.get(1).expect("scene path");
-    let steps: u64 = a.get(2).map_or(6000, |s| s.parse().unwrap());
-    let wx: usize = a.get(3).map_or(27, |s| s.parse().unwrap());
-    let wy: usize = a.get(4).map_or(14, |s| s.parse().unwrap());
-    let every: u64 = a.get(5).map_or(100, |s| s.parse().unwrap());
+    let Some(path) = a.get(1) else {
+        fail("give the scene path first (see the usage in the file header)")
+    };
+    let steps: u64 = arg(&a, 2, "STEPS", 6000);
+    let wx: usize = arg(&a, 3, "X", 27);
+    let wy: usize = arg(&a, 4, "Y", 14);
+    let every: u64 = arg(&a, 5, "EVERY", 100);
     // "free" (default), "hold" (every grain held from the step load on), or a grain index to hold alone.
     let hold = a.get(6).cloned().unwrap_or_else(|| "free".into());
     // The step (after the load) from which the grains named by `hold` are held.
-    let hold_from: u64 = a.get(7).map_or(0, |s| s.parse().unwrap());
-    let text = std::fs::read_to_string(path).unwrap();
-    let case = Case::<Terzaghi>::read(&text, path).unwrap();
+    let hold_from: u64 = arg(&a, 7, "FROM", 0);
+    let text = std::fs::read_to_string(path)
+        .unwrap_or_else(|e| fail(&format!("cannot read the scene `{path}`: {e}")));
+    let case = Case::<Terzaghi>::read(&text, path).unwrap_or_else(|e| fail(&e.to_string()));
     let exec = Exec {
         threads: 1,
         ..Exec::default()
     };
-    let mut state = Terzaghi::start(&case, &exec).unwrap();
+    let mut state = Terzaghi::start(&case, &exec).unwrap_or_else(|e| fail(&e.to_string()));
     while !state.loaded() {
-        Terzaghi::advance(&case, &mut state, None).unwrap();
+        Terzaghi::advance(&case, &mut state, None).unwrap_or_else(|e| fail(&e.to_string()));
     }
     let world = state.world_mut();
     let cs = (1.0f64 / 3.0).sqrt();
     let nx = world.fluid.shape().nx;
     let ny = world.fluid.shape().ny;
+    if wx >= nx || wy >= ny {
+        fail(&format!(
+            "the node ({wx}, {wy}) lies outside the {nx} x {ny} lattice"
+        ));
+    }
     eprintln!(
         "probe: lattice {nx} x {ny}, operator {:?}, collision {:?}, {} grains; watching ({wx}, {wy})",
         world.fluid.solid_operator(),
@@ -61,7 +85,15 @@ fn main() {
             match hold.as_str() {
                 "free" => {}
                 "hold" => world.dem.held.iter_mut().for_each(|x| *x = true),
-                g => world.dem.held[g.parse::<usize>().unwrap()] = true,
+                g => {
+                    let count = world.dem.held.len();
+                    match g.parse::<usize>() {
+                        Ok(i) if i < count => world.dem.held[i] = true,
+                        _ => fail(&format!(
+                            "HOLD `{g}` is neither free, hold nor a grain index below {count}"
+                        )),
+                    }
+                }
             }
             eprintln!(
                 "probe: from step {s} held grains: {}",

@@ -12,22 +12,20 @@
 //! row (pre-collision populations rebuilt by streaming the previous post-collision ones with half-way walls,
 //! checked against `solid_forces`), and the fluid momentum at covered nodes.
 use lbdem::engine::lattice::FluidLattice;
-use lbdem_kernels::coupling::{BodyShape, CoupledBody};
+use lbdem::kinds::fluid_compressibility::piston_body;
 use lbdem_kernels::fluid::boundary::{Boundaries, SideCondition};
 use lbdem_kernels::fluid::collide::{Collision, SolidOperator, Trt};
 use lbdem_kernels::fluid::d2q9::{OPPOSITE, VELOCITIES};
 use lbdem_kernels::fluid::step::FluidParams;
 
-fn piston(face: f64, v: f64, ny: usize, half: f64) -> CoupledBody<f64> {
-    CoupledBody {
-        center: lbdem_kernels::math::vector(face + half, 0.5 * (ny - 1) as f64),
-        velocity: lbdem_kernels::math::vector(v, 0.0),
-        spin: 0.0,
-        shape: BodyShape::Ellipse {
-            semi_major: 50.0 * ny as f64,
-            semi_minor: half,
-            angle: 0.5 * std::f64::consts::PI,
-        },
+/// `args[i]` parsed, or `default` when absent; a clear message and exit status 2 when it does not parse.
+fn arg<T: std::str::FromStr>(args: &[String], i: usize, name: &str, default: T) -> T {
+    match args.get(i) {
+        None => default,
+        Some(s) => s.parse().unwrap_or_else(|_| {
+            eprintln!("piston_probe: {name} `{s}` is not a valid value (see the usage in the file header)");
+            std::process::exit(2)
+        }),
     }
 }
 
@@ -38,13 +36,26 @@ fn main() {
         "omega1l" => SolidOperator::LinearizedNonEquilibriumBounceBack,
         "omega3" => SolidOperator::MovingWallBounceBack,
         "lambda" => SolidOperator::LambdaConsistent,
-        o => panic!("unknown operator {o}"),
+        o => {
+            eprintln!(
+                "piston_probe: unknown operator `{o}`: use omega1, omega1l, omega3 or lambda"
+            );
+            std::process::exit(2)
+        }
     };
     let collision = match a.get(2).map(String::as_str).unwrap_or("bgk") {
         "bgk" => Collision::Bgk,
-        _ => Collision::Trt(Trt::new(3.0 / 16.0).unwrap()),
+        "trt" => Collision::Trt(Trt::default()),
+        o => {
+            eprintln!("piston_probe: unknown collision `{o}`: use bgk or trt");
+            std::process::exit(2)
+        }
     };
-    let half: f64 = a.get(3).map_or(1.5, |s| s.parse().unwrap());
+    let half: f64 = arg(&a, 3, "HALF_THICKNESS", 1.5);
+    if !(half.is_finite() && half > 0.0) {
+        eprintln!("piston_probe: HALF_THICKNESS must be positive and finite, got {half}");
+        std::process::exit(2)
+    }
     let moved = a.get(4).map(String::as_str) != Some("rest");
     let periodic = a.get(5).map(String::as_str) == Some("periodic");
     let wf = op.weighting();
@@ -71,8 +82,10 @@ fn main() {
             force: [0.0; 2],
         },
     )
-    .unwrap();
-    fluid.set_collision(collision).unwrap();
+    .expect("a 101 x 101 lattice with walls and tau 0.875 is valid");
+    fluid
+        .set_collision(collision)
+        .expect("BGK and TRT with the default magic parameter are valid at tau 0.875");
     fluid.set_solid_operator(op);
     let start = 0.6 * (nx - 1) as f64;
     let mut face = if moved { start } else { start - 1.0 };
@@ -87,7 +100,7 @@ fn main() {
             }
         });
     }
-    fluid.cover_with_bodies(&[piston(face, 0.0, ny, half)], wf);
+    fluid.cover_with_bodies(&[piston_body(face, 0.0, ny, half)], wf);
     let total = move_steps + settle;
     let window = total - settle / 2;
     let stride = fluid.shape().stride;
@@ -104,7 +117,7 @@ fn main() {
             0.0
         };
         let before = (s >= window).then(|| fluid.populations().into_owned());
-        fluid.cover_with_bodies(&[piston(face, v, ny, half)], wf);
+        fluid.cover_with_bodies(&[piston_body(face, v, ny, half)], wf);
         fluid.step();
         face += v;
         if let Some(post0) = before {

@@ -90,18 +90,24 @@ pub struct CompressibilityOutcome {
     pub stress_ripple: f64,
 }
 
-/// The piston as the fluid sees it: a very flat ellipse at `face`, moving at `v` (lattice units).
-fn piston(face: f64, v: f64, ny: usize) -> CoupledBody<f64> {
+/// The piston as the fluid sees it: a very flat ellipse (semi-minor axis `half_thickness`, spanning 100× the
+/// box height `ny`) whose west face is at `face`, moving at `v` (lattice units). The kind uses
+/// [`PISTON_HALF_THICKNESS`]; the `piston_probe` example varies it.
+pub fn piston_body(face: f64, v: f64, ny: usize, half_thickness: f64) -> CoupledBody<f64> {
     CoupledBody {
-        center: lbdem_kernels::math::vector(face + PISTON_HALF_THICKNESS, 0.5 * (ny - 1) as f64),
+        center: lbdem_kernels::math::vector(face + half_thickness, 0.5 * (ny - 1) as f64),
         velocity: lbdem_kernels::math::vector(v, 0.0),
         spin: 0.0,
         shape: BodyShape::Ellipse {
             semi_major: 50.0 * ny as f64,
-            semi_minor: PISTON_HALF_THICKNESS,
+            semi_minor: half_thickness,
             angle: 0.5 * std::f64::consts::PI,
         },
     }
+}
+
+fn piston(face: f64, v: f64, ny: usize) -> CoupledBody<f64> {
+    piston_body(face, v, ny, PISTON_HALF_THICKNESS)
 }
 
 /// The fluid volume Σ(1 − ε) of the nodes west of `mid`.
