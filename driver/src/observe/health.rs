@@ -2,6 +2,7 @@
 //! run loop then writes the diverged state and the outputs so far).
 use lbdem_kernels::Real;
 
+use crate::engine::coupled::CoupledWorld;
 use crate::engine::dem::DemWorld;
 use crate::engine::lattice::FluidLattice;
 use crate::error::{LbdemError, Result};
@@ -55,6 +56,13 @@ pub fn dem_health<T: Real>(world: &DemWorld<T>) -> Result<()> {
         }
     }
     Ok(())
+}
+
+/// The health of a coupled world: its fluid ([`fluid_health`], with `hint`), then its grains
+/// ([`dem_health`]).
+pub fn coupled_health<T: Real>(world: &CoupledWorld<T>, hint: &str) -> Result<()> {
+    fluid_health(&world.fluid, hint)?;
+    dem_health(&world.dem)
 }
 
 /// A measured value that must be finite (a flux, a mean pressure), as [`LbdemError::Diverged`] otherwise.

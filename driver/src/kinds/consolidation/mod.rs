@@ -15,7 +15,7 @@ use crate::engine::exec::{Exec, ExecTarget};
 use crate::engine::lattice::FluidLattice;
 use crate::error::{non_negative, positive, LbdemError, Result};
 use crate::input::limits::{self, Budget};
-use crate::observe::health::{dem_health, finite, fluid_health};
+use crate::observe::health::{coupled_health, finite};
 use crate::output::snapshots::{chunk_with_snapshots, write_coupled_at_step, SnapshotClock};
 use crate::output::{csv, write_atomic};
 use crate::run::{run_in_memory, Case, Kind, OutputStage, Persist, RunOptions};
@@ -482,8 +482,7 @@ impl Kind for Consolidation {
     }
 
     fn health(_case: &Case<Self>, state: &ConsolidationState) -> Result<()> {
-        fluid_health(&state.world.fluid, "lower the load or the stiffness")?;
-        dem_health(&state.world.dem)
+        coupled_health(&state.world, "lower the load or the stiffness")
     }
 
     fn write_outputs(

@@ -38,7 +38,7 @@ use crate::engine::exec::{Exec, ExecTarget};
 use crate::engine::lattice::FluidLattice;
 use crate::error::{LbdemError, Result};
 use crate::input::limits::{self, Budget};
-use crate::observe::health::{dem_health, fluid_health};
+use crate::observe::health::coupled_health;
 use crate::output::snapshots::{chunk_with_snapshots, write_coupled, SnapshotClock};
 use crate::output::vtk::{LatticeFrame, Stamp, Units};
 use crate::output::{csv, write_atomic};
@@ -379,8 +379,7 @@ impl Kind for CoupledDemo {
     }
 
     fn health(_case: &Case<Self>, state: &DemoState) -> Result<()> {
-        fluid_health(&state.world.fluid, "lower demo.speed or raise demo.tau")?;
-        dem_health(&state.world.dem)
+        coupled_health(&state.world, "lower demo.speed or raise demo.tau")
     }
 
     fn write_outputs(

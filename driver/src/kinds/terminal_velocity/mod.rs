@@ -34,7 +34,7 @@ use crate::engine::exec::{Exec, ExecTarget};
 use crate::engine::lattice::FluidLattice;
 use crate::error::{positive, LbdemError, Result};
 use crate::input::limits::{self, Budget};
-use crate::observe::health::{dem_health, fluid_health};
+use crate::observe::health::coupled_health;
 use crate::output::snapshots::{chunk_with_snapshots, write_coupled, SnapshotClock};
 use crate::output::vtk::{LatticeFrame, Scale, Stamp};
 use crate::output::{csv, write_atomic};
@@ -604,8 +604,7 @@ impl Kind for TerminalVelocity {
     }
 
     fn health(_case: &Case<Self>, state: &TerminalState) -> Result<()> {
-        fluid_health(&state.world.fluid, "lower terminal_velocity.applied_force")?;
-        dem_health(&state.world.dem)
+        coupled_health(&state.world, "lower terminal_velocity.applied_force")
     }
 
     fn write_outputs(

@@ -26,7 +26,7 @@ use crate::input::limits::{self, Budget};
 use crate::observe::darcy::{permeability, SteadyFlow};
 use crate::observe::fit::fit_consolidation;
 use crate::observe::flow::fluid_row_means;
-use crate::observe::health::{dem_health, finite, fluid_health};
+use crate::observe::health::{coupled_health, finite};
 use crate::observe::steady::Steadiness;
 use crate::output::snapshots::{chunk_with_snapshots, write_coupled_at_step, SnapshotClock};
 use crate::output::{csv, write_atomic};
@@ -1020,8 +1020,7 @@ impl Kind for Terzaghi {
     }
 
     fn health(_case: &Case<Self>, state: &TerzaghiState) -> Result<()> {
-        fluid_health(&state.world.fluid, HINT)?;
-        dem_health(&state.world.dem)
+        coupled_health(&state.world, HINT)
     }
 
     fn write_outputs(
