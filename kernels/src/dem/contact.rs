@@ -445,7 +445,7 @@ mod tests {
             same(-step + (core::f64::consts::TAU + 2.0 * step) * next());
         }
         for e in -60..4 {
-            for m in [1.0, 1.1, 1.4142, 1.5, 1.99] {
+            for m in [1.0, 1.1, 1.3, 1.5, 1.99] {
                 let t = m * libm::exp2(e as f64);
                 same(t);
                 same(-t);

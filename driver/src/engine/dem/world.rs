@@ -645,7 +645,11 @@ impl<T: Real> DemWorld<T> {
         {
             let d = [p[0] - q[0], p[1] - q[1]];
             let moved = (d[0] * d[0] + d[1] * d[1]).sqrt() + (r - r0).max(T::zero());
-            if !(moved <= limit) {
+            // Not (moved ≤ limit): NaN fails too.
+            if !matches!(
+                moved.partial_cmp(&limit),
+                Some(std::cmp::Ordering::Less | std::cmp::Ordering::Equal)
+            ) {
                 return false;
             }
             scale = scale.max(p[0].abs()).max(p[1].abs()).max(r);
