@@ -10,7 +10,8 @@ use lbdem_kernels::dem::contact::{
     Contact,
 };
 use lbdem_kernels::dem::grid::{
-    build_cell_grid, candidate_pairs, carry_contact_history, cell_grid_scratch_len, CellGrid,
+    build_cell_grid, candidate_pairs, carry_contact_history, cell_grid_scratch_len,
+    filter_candidate_pairs, CellGrid,
 };
 use lbdem_kernels::dem::law::{linear_contact_force, BodyState, ContactLaw};
 use lbdem_kernels::dem::shape::{Particle, Placed, Wall};
@@ -314,6 +315,72 @@ proptest! {
         if c3.stored == 1 {
             prop_assert_eq!(small[0], got[0], "a short buffer keeps the lexicographically first pairs");
         }
+    }
+}
+
+/// The grid pass of `candidate_pairs` over a grid covering [0, 6] × [0, 4] (positions outside are clamped).
+fn grid_pass(positions: &[Vector<f64>], radii: &[f64], margin: f64) -> Vec<[usize; 2]> {
+    let r_max = radii.iter().fold(0.0f64, |a, &b| a.max(b));
+    let grid = CellGrid::covering(
+        lbdem_kernels::math::vector(0.0, 0.0),
+        lbdem_kernels::math::vector(6.0, 4.0),
+        2.0 * r_max + margin,
+        64,
+    )
+    .unwrap();
+    let (start_len, order_len) = cell_grid_scratch_len(&grid, positions.len());
+    let mut start = vec![0; start_len];
+    let mut order = vec![0; order_len];
+    build_cell_grid(&grid, positions, &mut start, &mut order).unwrap();
+    let mut pairs = vec![[0, 0]; 4000];
+    let count =
+        candidate_pairs(&grid, positions, radii, margin, &start, &order, &mut pairs).unwrap();
+    assert_eq!(count.found, count.stored);
+    pairs.truncate(count.stored);
+    pairs
+}
+
+proptest! {
+    #![proptest_config(config(256))]
+
+    /// The driver's Verlet list: the grid pass within margin + skin, later filtered by `filter_candidate_pairs`
+    /// after every particle moved by up to `move` and grew by up to `grow` with move + grow ≤ 0.4 skin (the
+    /// driver's `VERLET_MOVE`), gives exactly the grid pass at the new positions and radii, in the same order.
+    /// Moves are drawn in direction and length, so pairs cross the margin in both directions.
+    #[test]
+    fn verlet_filter_equals_the_grid_pass(
+        pts in prop::collection::vec(
+            (0.5f64..5.5, 0.5f64..3.5, 0.05f64..0.25, 0.0f64..std::f64::consts::TAU, 0.0f64..1.0, 0.0f64..1.0),
+            0..70,
+        ),
+        skin_fraction in 0.05f64..1.0,
+    ) {
+        let margin = 0.01;
+        let positions: Vec<Vector<f64>> = pts.iter().map(|p| Vector::new(p.0, p.1)).collect();
+        let radii: Vec<f64> = pts.iter().map(|p| p.2).collect();
+        let skin = skin_fraction * 0.05;
+        let verlet = grid_pass(&positions, &radii, margin + skin);
+        let limit = 0.4 * skin;
+        let moved: Vec<Vector<f64>> = pts.iter().map(|p| {
+            let r = limit * p.4 * (1.0 - p.5);
+            Vector::new(p.0 + r * p.3.cos(), p.1 + r * p.3.sin())
+        }).collect();
+        let grown: Vec<f64> = pts.iter().map(|p| p.2 + limit * p.4 * p.5).collect();
+        let expected = grid_pass(&moved, &grown, margin);
+        let mut got = vec![[0, 0]; 4000];
+        let count = filter_candidate_pairs(&moved, &grown, margin, &verlet, &mut got).unwrap();
+        prop_assert_eq!(count.found, count.stored);
+        prop_assert_eq!(&got[..count.stored], &expected[..]);
+        // A too-small output buffer still counts every pair and keeps the first.
+        let mut small = [[0, 0]; 1];
+        let c = filter_candidate_pairs(&moved, &grown, margin, &verlet, &mut small).unwrap();
+        prop_assert_eq!(c.found, expected.len());
+        prop_assert_eq!(c.stored, expected.len().min(1));
+        if c.stored == 1 {
+            prop_assert_eq!(small[0], expected[0]);
+        }
+        // Mismatched radii are refused.
+        prop_assert!(filter_candidate_pairs(&moved, &grown[..grown.len().saturating_sub(1)], margin, &verlet, &mut small).is_err() || grown.is_empty());
     }
 }
 

@@ -164,10 +164,25 @@ pub fn ellipse_wall<T: Real>(ellipse: &Placed<T>, wall: &Wall<T>) -> Contact<T> 
     placed_wall(ellipse, wall)
 }
 
+/// The unit direction (cos θ, sin θ), bitwise [`unit`]`(θ)`: in `f64` by the `libm` crate's `sincos`, which
+/// shares one argument reduction between the two and returns exactly its `sin` and `cos` (the same reduction
+/// and kernels, combined by the same quadrant table; checked bitwise over random and edge arguments by
+/// `sin_cos_direction_is_bitwise_unit` below and by the `Real` property tests); in `f32` by `unit` itself.
+#[inline(always)]
+fn direction<T: Real>(theta: T) -> Vector<T> {
+    if core::any::TypeId::of::<T>() == core::any::TypeId::of::<f64>() {
+        // T is f64: to_f64_exact and lit are the identity.
+        let (s, c) = libm::sincos(theta.to_f64_exact());
+        Vector::new(T::lit(c), T::lit(s))
+    } else {
+        unit(theta)
+    }
+}
+
 /// s, s', s'' at angle θ (see the module documentation).
 #[inline(always)]
 fn gap<T: Real>(a: &Placed<T>, b: &Placed<T>, d: Vector<T>, theta: T) -> (T, T, T) {
-    gap_along(a, b, d, unit(theta))
+    gap_along(a, b, d, direction(theta))
 }
 
 /// s, s', s'' along the unit direction n.
@@ -294,7 +309,7 @@ pub fn ellipse_ellipse<T: Real>(a: &Placed<T>, b: &Placed<T>) -> Contact<T> {
             best_theta = t;
         }
     }
-    let n = unit(best_theta);
+    let n = direction(best_theta);
     let point_i = a.support_point(n);
     let point_j = b.support_point(-n);
     Contact::from_points(n, -best_s, point_i, point_j)
@@ -389,6 +404,76 @@ mod tests {
                 (n[0] - c).abs() <= 4.0 * f64::EPSILON && (n[1] - s).abs() <= 4.0 * f64::EPSILON,
                 "direction {k}: {n:?} vs ({c}, {s})"
             );
+        }
+    }
+
+    /// `direction` is bitwise `unit` (so swapping it in changes no contact): arguments across the range the
+    /// search uses ([−2π/32, 2π + 2π/32], where the reduction by π/2 switches quadrants), every sample angle
+    /// and its bracket ends as the search computes them, the tiny-argument branches (|θ| below 2⁻²⁷√2 and
+    /// 2⁻²⁶, where `sin` and `sincos` take different paths to the same result), and large and non-finite ones.
+    #[test]
+    fn sin_cos_direction_is_bitwise_unit() {
+        fn same(t: f64) {
+            let (u, v) = (unit(t), direction(t));
+            assert_eq!(
+                (u[0].to_bits(), u[1].to_bits()),
+                (v[0].to_bits(), v[1].to_bits()),
+                "θ = {t:e}"
+            );
+            let (u, v) = (unit(t as f32), direction(t as f32));
+            assert_eq!(
+                (u[0].to_bits(), u[1].to_bits()),
+                (v[0].to_bits(), v[1].to_bits())
+            );
+        }
+        let step = core::f64::consts::TAU / ELLIPSE_SAMPLES as f64;
+        for k in 0..ELLIPSE_SAMPLES {
+            let t = step * k as f64;
+            for x in [t, t - step, t + step] {
+                same(x);
+            }
+        }
+        // A fixed-seed linear congruential sequence (the kernels have no RNG dependency).
+        let mut z = 0x2545_f491_4f6c_dd1du64;
+        let mut next = || {
+            z = z
+                .wrapping_mul(6_364_136_223_846_793_005)
+                .wrapping_add(1_442_695_040_888_963_407);
+            (z >> 11) as f64 / (1u64 << 53) as f64
+        };
+        for _ in 0..200_000 {
+            same(-step + (core::f64::consts::TAU + 2.0 * step) * next());
+        }
+        for e in -60..4 {
+            for m in [1.0, 1.1, 1.3, 1.5, 1.99] {
+                let t = m * libm::exp2(e as f64);
+                same(t);
+                same(-t);
+            }
+        }
+        for t in [
+            0.0,
+            -0.0,
+            1e-300,
+            5e-324,
+            1e5,
+            -3e7,
+            1e300,
+            f64::INFINITY,
+            f64::NAN,
+        ] {
+            let (u, v) = (unit(t), direction(t));
+            assert_eq!(
+                (u[0].to_bits(), u[1].to_bits()),
+                (v[0].to_bits(), v[1].to_bits()),
+                "θ = {t:e}"
+            );
+        }
+        // Every f64 with high word at the two tiny-argument thresholds (|θ| near 2⁻²⁷√2 and 2⁻²⁶).
+        for hi in [0x3e46_a09d_u64, 0x3e46_a09e, 0x3e4f_ffff, 0x3e50_0000] {
+            for lo in [0u64, 1, 0x7fff_ffff, 0xffff_ffff] {
+                same(f64::from_bits((hi << 32) | lo));
+            }
         }
     }
 

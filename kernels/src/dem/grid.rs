@@ -306,3 +306,41 @@ pub fn carry_contact_history<T: Real>(
     }
     Ok(carried)
 }
+
+/// The pairs of `superset` (sorted, as [`candidate_pairs`] lists them) whose bounding circles come within
+/// `margin` of each other, written in order to `pairs` (as many as fit; the count returned as by
+/// [`candidate_pairs`]). The test is [`candidate_pairs`]' own expression, operation for operation, so when
+/// `superset` holds every pair [`candidate_pairs`] would list for these positions, radii and margin (a Verlet
+/// list: pairs within `margin + skin` when built, kept while no particle has moved plus grown by more than
+/// half the skin), the output is bitwise the same list in the same order. O(superset) instead of a grid pass.
+/// Pairs naming an index out of range are skipped.
+pub fn filter_candidate_pairs<T: Real>(
+    positions: &[Vector<T>],
+    bounding_radii: &[T],
+    margin: T,
+    superset: &[[usize; 2]],
+    pairs: &mut [[usize; 2]],
+) -> Result<PairCount, GridError> {
+    let n = positions.len();
+    if bounding_radii.len() != n {
+        return Err(GridError::BufferLength);
+    }
+    let mut found = 0;
+    let mut stored = 0;
+    for &[i, j] in superset {
+        if i >= n || j >= n || j <= i {
+            continue;
+        }
+        let pi = positions[i];
+        let d = [positions[j][0] - pi[0], positions[j][1] - pi[1]];
+        let reach = bounding_radii[i] + bounding_radii[j] + margin;
+        if d[0] * d[0] + d[1] * d[1] < reach * reach {
+            if let Some(slot) = pairs.get_mut(stored) {
+                *slot = [i, j];
+                stored += 1;
+            }
+            found += 1;
+        }
+    }
+    Ok(PairCount { found, stored })
+}

@@ -3,8 +3,11 @@
 //! One step (dissertation ch. 2 / ch. 6.6 solid half; order of calls as in `lbdem_kernels::dem`), every force
 //! and the integration by the kernels' whole-assembly passes ([`lbdem_kernels::dem::assembly`]):
 //!
-//! 1. broad phase: [`build_cell_grid`] over the particles' bounding box, [`candidate_pairs`] (bounding circles
-//!    within `margin`), [`carry_contact_history`] (shear forces of persisting contacts);
+//! 1. broad phase: [`candidate_pairs`] (bounding circles within `margin`), computed as
+//!    [`filter_candidate_pairs`] of a Verlet list (the grid pass [`build_cell_grid`], [`candidate_pairs`] within
+//!    `margin` + a skin of [`VERLET_SKIN`] × the smallest bounding radius, rebuilt once a particle has moved plus
+//!    grown by [`VERLET_MOVE`] × the skin): the same pair list bit for bit, without a grid pass every step;
+//!    [`carry_contact_history`] (shear forces of persisting contacts);
 //! 2. contacts: [`pair_contacts_placed`] (closest approach + linear contact law per pair), [`add_pair_forces`];
 //! 3. bonds: [`bond_forces`] (point bond of eq. 6.13 or Potyondy & Cundall 2004 parallel bond per bond),
 //!    [`add_bond_forces`]; each break recorded as a [`BreakRecord`] (step, position, mode, orientation, load);
@@ -34,7 +37,9 @@ use lbdem_kernels::dem::assembly::{
 pub use lbdem_kernels::dem::bond::{Bond, BondLaw};
 use lbdem_kernels::dem::bond::{BondForce, BreakMode, ParallelBond, PointBond};
 use lbdem_kernels::dem::contact::closest_approach;
-use lbdem_kernels::dem::grid::{build_cell_grid, candidate_pairs, carry_contact_history, CellGrid};
+use lbdem_kernels::dem::grid::{
+    build_cell_grid, candidate_pairs, carry_contact_history, filter_candidate_pairs, CellGrid,
+};
 use lbdem_kernels::dem::law::ContactForce;
 use lbdem_kernels::dem::servo::ServoLaw;
 use lbdem_kernels::dem::shape::{Particle, Placed, Wall};
@@ -54,6 +59,14 @@ pub const CRITICAL_STEP_SAFETY: f64 = 0.8;
 const PARALLEL_CHUNK: usize = 512;
 /// Largest number of broad-phase cells along an axis.
 const MAX_CELLS_PER_AXIS: usize = 4096;
+/// Verlet skin of the broad phase, as a fraction of the smallest bounding radius when the list is built: the
+/// grid pass lists the pairs within `margin` + skin, and each step filters that list by the exact test.
+/// A performance choice only (the filtered list is bitwise the grid pass's).
+const VERLET_SKIN: f64 = 0.2;
+/// A Verlet list is kept while every particle's displacement plus bounding-radius growth since it was built is
+/// at most this fraction of the skin: a pair then needs at most 0.8 skin of the 1 skin allowed, the rest a
+/// guard against rounding of the distance test far beyond its few ulp.
+const VERLET_MOVE: f64 = 0.4;
 
 /// How bonds are installed between touching particles (chosen by the caller).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -225,6 +238,20 @@ pub struct DemWorld<T> {
     cell_particles: Vec<usize>,
     pairs: Vec<[usize; 2]>,
     shear: Vec<T>,
+    /// Verlet list of the broad phase (scratch: rebuilt after a checkpoint is loaded): the pairs within
+    /// `verlet_margin` + `verlet_skin` at `verlet_positions` and `verlet_radii`.
+    #[serde(skip)]
+    verlet_pairs: Vec<[usize; 2]>,
+    #[serde(skip)]
+    verlet_positions: Vec<Vector<T>>,
+    #[serde(skip)]
+    verlet_radii: Vec<T>,
+    #[serde(skip)]
+    verlet_margin: T,
+    #[serde(skip)]
+    verlet_skin: T,
+    #[serde(skip)]
+    verlet_valid: bool,
     #[serde(skip)]
     previous_pairs: Vec<[usize; 2]>,
     #[serde(skip)]
@@ -294,6 +321,12 @@ impl<T: Real> DemWorld<T> {
             cell_particles: Vec::new(),
             pairs: Vec::new(),
             shear: Vec::new(),
+            verlet_pairs: Vec::new(),
+            verlet_positions: Vec::new(),
+            verlet_radii: Vec::new(),
+            verlet_margin: T::zero(),
+            verlet_skin: T::zero(),
+            verlet_valid: false,
             previous_pairs: Vec::new(),
             previous_shear: Vec::new(),
             contact_forces: Vec::new(),
@@ -589,24 +622,55 @@ impl<T: Real> DemWorld<T> {
         )
     }
 
-    fn broad_phase(&mut self) {
-        let n = self.particles.len();
-        self.positions.clear();
-        self.positions
-            .extend(self.particles.iter().map(|p| p.position));
-        self.radii.clear();
-        self.radii
-            .extend(self.particles.iter().map(|p| p.shape.bounding_radius()));
-        std::mem::swap(&mut self.pairs, &mut self.previous_pairs);
-        std::mem::swap(&mut self.shear, &mut self.previous_shear);
-        self.pairs.clear();
-        if n < 2 {
-            self.shear.clear();
-            return;
+    /// Whether the Verlet list still holds every pair the grid pass would list now: same particle count and
+    /// margin, and every particle moved plus grew by at most [`VERLET_MOVE`] × skin since it was built (so a
+    /// pair within `margin` now was within `margin` + skin then). Non-finite values fail the test.
+    fn verlet_list_holds(&self) -> bool {
+        let n = self.positions.len();
+        if !self.verlet_valid
+            || self.verlet_positions.len() != n
+            || self.verlet_radii.len() != n
+            || self.radii.len() != n
+            || self.verlet_margin != self.margin
+        {
+            return false;
         }
+        let limit = T::lit(VERLET_MOVE) * self.verlet_skin;
+        let mut scale = T::zero();
+        for ((p, q), (&r, &r0)) in self
+            .positions
+            .iter()
+            .zip(&self.verlet_positions)
+            .zip(self.radii.iter().zip(&self.verlet_radii))
+        {
+            let d = [p[0] - q[0], p[1] - q[1]];
+            let moved = (d[0] * d[0] + d[1] * d[1]).sqrt() + (r - r0).max(T::zero());
+            // Not (moved ≤ limit): NaN fails too.
+            if !matches!(
+                moved.partial_cmp(&limit),
+                Some(std::cmp::Ordering::Less | std::cmp::Ordering::Equal)
+            ) {
+                return false;
+            }
+            scale = scale.max(p[0].abs()).max(p[1].abs()).max(r);
+        }
+        // The rounding of the distance test is a few ulp of the coordinates; the unused skin must dwarf it.
+        (T::one() - T::lit(2.0 * VERLET_MOVE)) * self.verlet_skin > T::lit(1e-9) * scale
+    }
+
+    /// Rebuild the Verlet list: the grid pass with `margin` + skin.
+    fn rebuild_verlet_list(&mut self) {
+        let n = self.positions.len();
         let r_max = self.radii.iter().fold(T::zero(), |a, &b| a.max(b));
+        let r_min = self.radii.iter().fold(T::infinity(), |a, &b| a.min(b));
+        let skin = if r_min.is_finite() && r_min > T::zero() {
+            T::lit(VERLET_SKIN) * r_min
+        } else {
+            T::zero()
+        };
+        let reach = self.margin + skin;
         let (lo, hi) = self.bounds();
-        let cell = T::lit(2.0) * r_max + self.margin;
+        let cell = T::lit(2.0) * r_max + reach;
         // Bounds are finite for finite positions; a non-finite grid falls back to one cell (the kernel clamps).
         let grid = CellGrid::covering(lo, hi, cell, MAX_CELLS_PER_AXIS)
             .or_else(|_| CellGrid::new(Vector::zeros(), T::one(), 1, 1))
@@ -621,18 +685,68 @@ impl<T: Real> DemWorld<T> {
         )
         .expect("buffers sized to the grid");
         loop {
-            let cap = self.pairs.capacity().max(4 * n);
-            self.pairs.resize(cap, [0, 0]);
+            let cap = self.verlet_pairs.capacity().max(4 * n);
+            self.verlet_pairs.resize(cap, [0, 0]);
             let count = candidate_pairs(
                 &grid,
                 &self.positions,
                 &self.radii,
-                self.margin,
+                reach,
                 &self.cell_start,
                 &self.cell_particles,
-                &mut self.pairs,
+                &mut self.verlet_pairs,
             )
             .expect("buffers sized to the grid");
+            if count.stored == count.found {
+                self.verlet_pairs.truncate(count.found);
+                break;
+            }
+            self.verlet_pairs.clear();
+            self.verlet_pairs.reserve(count.found);
+        }
+        self.verlet_positions.clone_from(&self.positions);
+        self.verlet_radii.clone_from(&self.radii);
+        self.verlet_margin = self.margin;
+        self.verlet_skin = skin;
+        self.verlet_valid = true;
+    }
+
+    /// The candidate pairs of this step: the kernel's grid pass ([`candidate_pairs`]) within `margin`, computed
+    /// as the kernel's [`filter_candidate_pairs`] of a Verlet list (the grid pass within `margin` + skin, rebuilt
+    /// when a particle has moved plus grown too far): bitwise the same pair list, without a grid pass per step.
+    fn broad_phase(&mut self) {
+        let n = self.particles.len();
+        self.positions.clear();
+        self.positions
+            .extend(self.particles.iter().map(|p| p.position));
+        self.radii.clear();
+        self.radii
+            .extend(self.particles.iter().map(|p| p.shape.bounding_radius()));
+        std::mem::swap(&mut self.pairs, &mut self.previous_pairs);
+        std::mem::swap(&mut self.shear, &mut self.previous_shear);
+        self.pairs.clear();
+        if n < 2 {
+            self.shear.clear();
+            self.verlet_valid = false;
+            return;
+        }
+        if !self.verlet_list_holds() {
+            self.rebuild_verlet_list();
+        }
+        loop {
+            let cap = self
+                .pairs
+                .capacity()
+                .max(self.verlet_pairs.len().min(4 * n));
+            self.pairs.resize(cap, [0, 0]);
+            let count = filter_candidate_pairs(
+                &self.positions,
+                &self.radii,
+                self.margin,
+                &self.verlet_pairs,
+                &mut self.pairs,
+            )
+            .expect("radii sized to the positions");
             if count.stored == count.found {
                 self.pairs.truncate(count.found);
                 break;
