@@ -4,7 +4,9 @@
 //! by ~1e-3 rad between calls (so no cell fraction can be reused), like grains in a coupled run. Uses only API
 //! that predates the incremental re-mapping, so the same file measures an older commit for an A/B comparison.
 //!
-//! `cargo run --release -p lbdem-benches --example cover_remap -- [calls] [threads]` (defaults 30, 1). Prints
+//! `cargo run --release -p lbdem-benches --example cover_remap -- [calls] [threads]` (defaults 30, 1);
+//! `LBDEM_SOLID_OPERATOR=lambda` re-maps under ΩΛ (`LambdaConsistent`, the fracture scenes' default: the
+//! re-mapping then also computes the open-link masks), otherwise under Ω₁ₗ as the coupled bench. Prints
 //! wall time and process CPU time per call (the CPU time is less disturbed by other processes on a shared
 //! machine), a checksum of the solid-fraction map (equal across versions with the same coverage kernel: the
 //! re-mapping itself is bitwise the same), the solid area, and the number of nodes with a roundoff-level
@@ -14,7 +16,7 @@ use std::time::Instant;
 use lbdem::engine::lattice::FluidLattice;
 use lbdem_kernels::coupling::{BodyShape, CoupledBody};
 use lbdem_kernels::fluid::boundary::Boundaries;
-use lbdem_kernels::fluid::collide::Weighting;
+use lbdem_kernels::fluid::collide::{SolidOperator, Weighting};
 use lbdem_kernels::fluid::step::FluidParams;
 
 /// Deterministic pseudo-random number in [0, 1) from an integer (SplitMix64 finaliser).
@@ -74,6 +76,12 @@ fn main() {
     };
     let mut lattice =
         FluidLattice::<f64>::new(1000, 500, Boundaries::periodic(), params).expect("lattice");
+    let lambda = std::env::var("LBDEM_SOLID_OPERATOR").is_ok_and(|v| v == "lambda");
+    lattice.set_solid_operator(if lambda {
+        SolidOperator::LambdaConsistent
+    } else {
+        SolidOperator::LinearizedNonEquilibriumBounceBack
+    });
     let sets: Vec<_> = (0..=calls).map(bodies).collect();
     pool.install(|| lattice.cover_with_bodies(&sets[0], Weighting::NobleTorczynski));
     let (cpu0, wall0) = (cpu_seconds(), Instant::now());
@@ -89,7 +97,8 @@ fn main() {
     let tiny = eps.iter().filter(|&&v| v > 0.0 && v < 1e-9).count();
     let full = eps.iter().filter(|&&v| v == 1.0).count();
     println!(
-        "{threads} thread(s): {:.2} ms wall, {:.2} ms CPU per call; {} covered nodes, solid area {:.6}, checksum {checksum:016x}; {tiny} nodes with 0 < ε < 1e-9 (roundoff), {full} with ε = 1",
+        "{} {threads} thread(s): {:.2} ms wall, {:.2} ms CPU per call; {} covered nodes, solid area {:.6}, checksum {checksum:016x}; {tiny} nodes with 0 < ε < 1e-9 (roundoff), {full} with ε = 1",
+        if lambda { "ΩΛ" } else { "Ω₁ₗ" },
         1e3 * wall / calls as f64,
         1e3 * cpu / calls as f64,
         lattice.covered_nodes(),

@@ -493,7 +493,17 @@ pub fn ellipse_grid_fractions<T: Real>(
     bd[cut_cell] = true;
     let ab = a * b;
     for j in 0..h {
-        for k in 0..w {
+        // Only the cells from the row's first boundary cell to its last can be covered: a cell no crossing
+        // touches lies entirely on one side of the ellipse, and so does a run of such cells (their shared edges
+        // are not crossed either); the run at either end of a row reaches the block's outermost lattice lines,
+        // which lie outside the bounding circle, so it is outside (fraction 0, as filled above). A row without
+        // boundary cells is outside altogether.
+        let row = &bd[j * w..(j + 1) * w];
+        let (Some(first), Some(last)) = (row.iter().position(|&m| m), row.iter().rposition(|&m| m))
+        else {
+            continue;
+        };
+        for k in first..=last {
             let e = j * w + k;
             fr[e] = if bd[e] {
                 (fr[e] * ab).max(T::zero()).min(T::one())

@@ -114,15 +114,15 @@ struct CoverScratch {
 }
 
 /// The cells one body covers: its cell range and, for every cell with a positive fraction, in increasing node
-/// order, the node, its fraction (for the geometry in `key`), the node's coordinates and the body's rigid
-/// velocity there (re-evaluated at every call).
+/// order, the node, its fraction (for the geometry in `key`) and the node's coordinates. The body's rigid
+/// velocity at the nodes is evaluated where the shares are written (step 4 of
+/// [`FluidLattice::cover_with_bodies`]), not stored here.
 #[derive(Default)]
 struct BodyCells {
     key: Option<[u64; 6]>,
     range: Option<[usize; 4]>,
     fractions: Vec<(u32, f64)>,
     points: Vec<[f64; 2]>,
-    velocities: Vec<[f64; 2]>,
     /// Scratch of the whole-ellipse kernel (`ellipse_grid_fractions`): fractions and boundary marks of the
     /// body's unclamped cell block.
     grid_fractions: Vec<f64>,
@@ -150,19 +150,13 @@ impl BodyCells {
         }
     }
 
-    /// Recompute the cells unless the geometry is bitwise unchanged (nodes on Zou–He sides are skipped), then
-    /// the rigid velocities at the cells' nodes.
+    /// Recompute the cells unless the geometry is bitwise unchanged (nodes on Zou–He sides are skipped).
     fn update<T: Real>(&mut self, body: &CoupledBody<f64>, s: &LatticeShape, bc: &Boundaries<T>) {
         let key = Self::geometry_key(body);
         if self.key != Some(key) {
             self.key = Some(key);
             self.recompute(body, s, bc);
         }
-        self.velocities.clear();
-        self.velocities.extend(self.points.iter().map(|&p| {
-            let v = rigid_velocity(body, Vector::from(p));
-            [v[0], v[1]]
-        }));
     }
 
     fn recompute<T: Real>(
@@ -254,21 +248,49 @@ impl BodyCells {
         ) {
             return false;
         }
-        // The lattice's part of the block (the same bounds, clamped).
+        // The lattice's part of the block (the same bounds, clamped), without the nodes on Zou–He sides. In each
+        // row only the cells from its first boundary cell to its last can have a positive fraction (the kernel
+        // leaves the others at 0, see `ellipse_grid_fractions`), so only those are visited.
         let (gx, gy) = (
             (x0 as i64 - grid.x0) as usize,
             (y0 as i64 - grid.y0) as usize,
         );
-        for y in y0..=y1 {
-            let row = (y - y0 + gy) * grid.w + gx;
-            for x in x0..=x1 {
-                if on_zou_he_side(s, bc, x, y) {
-                    continue;
-                }
-                let frac = self.grid_fractions[row + x - x0];
+        // First and last node along an axis from `lo..=hi` without the lattice's first node (`low` side Zou–He)
+        // and last node (`high` side Zou–He, `n` nodes); `None` when nothing is left.
+        let trim = |lo: usize, hi: usize, n: usize, low: bool, high: bool| {
+            let lo = if low && lo == 0 { 1 } else { lo };
+            let hi = if high && hi + 1 == n {
+                hi.checked_sub(1)?
+            } else {
+                hi
+            };
+            (lo <= hi).then_some((lo, hi))
+        };
+        let (Some((xa, xb)), Some((ya, yb))) = (
+            trim(x0, x1, s.nx, bc.west.is_zou_he(), bc.east.is_zou_he()),
+            trim(y0, y1, s.ny, bc.south.is_zou_he(), bc.north.is_zou_he()),
+        ) else {
+            return true;
+        };
+        for y in ya..=yb {
+            let row = (y - y0 + gy) * grid.w;
+            // The row's boundary cells in the whole block row (its covered cells lie from the first to the last,
+            // also where the lattice cuts the block), then the lattice part's columns of the block.
+            let marks = &self.grid_boundary[row..row + grid.w];
+            let (Some(first), Some(last)) = (
+                marks.iter().position(|&m| m),
+                marks.iter().rposition(|&m| m),
+            ) else {
+                continue;
+            };
+            let (ka, kb) = ((xa - x0 + gx).max(first), (xb - x0 + gx).min(last));
+            let yf = y as f64;
+            for k in ka..=kb {
+                let frac = self.grid_fractions[row + k];
                 if frac > 0.0 {
+                    let x = k + x0 - gx;
                     self.fractions.push((s.index(x, y) as u32, frac));
-                    self.points.push([x as f64, y as f64]);
+                    self.points.push([x as f64, yf]);
                 }
             }
         }
@@ -765,12 +787,12 @@ impl<T: Real> FluidLattice<T> {
     pub fn cover_with_bodies(&mut self, bodies: &[CoupledBody<f64>], weighting: Weighting) {
         let s = self.shape;
         let bc = self.bc;
-        // 1. Each body's cells (row-major, so in increasing node order) and its rigid velocity at them, in
+        // 1. Each body's cells (row-major, so in increasing node order), in
         //    parallel over bodies: only the cells of its bounding box are visited. An ellipse's fractions come
         //    from one pass over the lattice lines crossing it (`ellipse_grid_fractions`: one angle per crossing,
         //    shared by the two cells it separates); discs, and the rare ellipse the pass refuses, take the
         //    per-cell exact formula on the cells near their boundary. A body whose geometry is bitwise unchanged
-        //    since the last call keeps its cell fractions (only the rigid velocities are re-evaluated).
+        //    since the last call keeps its cell fractions. The rigid velocities are evaluated in step 4.
         let scratch = &mut self.cover_scratch;
         scratch.bodies.resize_with(bodies.len(), BodyCells::default);
         scratch
@@ -920,13 +942,14 @@ impl<T: Real> FluidLattice<T> {
                         let slot = &mut count[node as usize - base];
                         let at = *slot as usize;
                         *slot += 1;
-                        let v = cells.velocities[i];
+                        let p = cells.points[i];
+                        let v = rigid_velocity(&bodies[body], Vector::from(p));
                         out.shares[at] = SolidShare {
                             fraction: T::lit(frac),
                             velocity: [T::lit(v[0]), T::lit(v[1])],
                         };
                         out.owners[at] = body as u32;
-                        out.share_nodes[at] = cells.points[i];
+                        out.share_nodes[at] = p;
                     }
                 }
                 for &n in out.nodes.iter() {
