@@ -16,15 +16,15 @@ use lbdem_kernels::fluid::aa::{
 };
 use lbdem_kernels::fluid::boundary::{Boundaries, SideCondition, SideProfiles};
 use lbdem_kernels::fluid::collide::{
-    psm_collide_links, psm_velocity, Collision, OpenLinks, PsmParams, SolidOperator, SolidShare,
-    Weighting, ALL_LINKS_OPEN,
+    psm_velocity, Collision, OpenLinks, PsmParams, SolidOperator, SolidShare, Weighting,
+    ALL_LINKS_OPEN,
 };
 use lbdem_kernels::fluid::d2q9::{equilibrium, OPPOSITE, Q};
 use lbdem_kernels::fluid::lattice::{LatticeShape, Side};
 use lbdem_kernels::fluid::step::{
-    classify_special_nodes, collide_covered_nodes, covered_node_value, fix_special_nodes,
-    gather_node_in, gathered_moments_in, nodes_in_rows, open_links, planes_mut, special_node_value,
-    CoveredNodes, Domain, FluidParams, FLUID, SOLID,
+    classify_special_nodes, collide_covered_list, collide_covered_nodes, covered_node_value,
+    fix_special_nodes, gather_node_in, gathered_moments_in, nodes_in_rows, open_links, planes_mut,
+    special_node_value, CoveredNodes, Domain, FluidParams, FLUID, SOLID,
 };
 use lbdem_kernels::math::{Point, Vector};
 use lbdem_kernels::Real;
@@ -1353,18 +1353,26 @@ impl<T: Real> FluidLattice<T> {
                 .enumerate()
                 .for_each(|(b, (band, (lo, hi, ex, vals)))| {
                     let y0 = b * band_rows;
-                    let first = offsets[*lo] as usize;
                     let own = |k: usize| !mask[covered[k] as usize];
                     if let Some(psm) = &psm {
+                        let (lo, hi) = (*lo, *hi);
+                        let rows = &*band;
                         with_simd(simd, || {
-                            for (k, v) in (*lo..*hi).zip(vals.iter_mut()).filter(|(k, _)| own(*k)) {
-                                let n = covered[k] as usize;
-                                let mut f = load_from_rows(band, kind, y0, n % nx, n / nx);
-                                let (a, b) = (offsets[k] as usize, offsets[k + 1] as usize);
-                                let ex = &mut ex[a - first..b - first];
-                                psm_collide_links(&mut f, psm, &shares[a..b], links[k], ex);
-                                *v = Some(f);
-                            }
+                            collide_covered_list(
+                                psm,
+                                &offsets[lo..=hi],
+                                shares,
+                                &links[lo..hi],
+                                ex,
+                                |j| {
+                                    let k = lo + j;
+                                    own(k).then(|| {
+                                        let n = covered[k] as usize;
+                                        load_from_rows(rows, kind, y0, n % nx, n / nx)
+                                    })
+                                },
+                                |j, f| vals[j] = Some(f),
+                            )
                         })
                     }
                     aa_bulk_exec(simd, band, kind, &params, &collision);

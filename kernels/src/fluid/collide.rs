@@ -633,7 +633,6 @@ pub fn psm_collide_links<T: Real>(
     exchange: &mut [[T; 2]],
 ) -> T {
     let rates = params.collision.rates_unchecked(params.tau);
-    let omega = rates.plus;
     let forced = params.force[0] != T::zero() || params.force[1] != T::zero();
     let mut eps_sum = T::zero();
     for s in shares {
@@ -655,6 +654,25 @@ pub fn psm_collide_links<T: Real>(
     if params.solid == SolidOperator::LambdaConsistent {
         return lambda_collide(f, params, rates, shares, eps_sum, open, exchange);
     }
+    operator_collide(f, params, rates, forced, shares, eps_sum, eps, exchange)
+}
+
+/// The partially-saturated collision of a covered node (Σε > 0, `eps` = min(Σε, 1)) under the operators Ω₁, Ω₂,
+/// Ω₃ and Ω₁ₗ: the body of [`psm_collide_links`] after its checks, shared with the batched pass
+/// ([`psm_collide_lanes`]) so that both run the same arithmetic. `forced` says whether `params.force` is not zero.
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+fn operator_collide<T: Real>(
+    f: &mut [T; Q],
+    params: &PsmParams<T>,
+    rates: Rates<T>,
+    forced: bool,
+    shares: &[SolidShare<T>],
+    eps_sum: T,
+    eps: T,
+    exchange: &mut [[T; 2]],
+) -> T {
+    let omega = rates.plus;
     let b_total = weighting(params.weighting, eps, params.tau);
     let (rho, u) = if forced {
         macroscopic(f, params.force)
@@ -832,8 +850,25 @@ fn lambda_collide<T: Real>(
     open: OpenLinks,
     exchange: &mut [[T; 2]],
 ) -> T {
-    let rho = density(f);
     if lambda_fully_covered(eps_sum) {
+        lambda_full(f, shares, eps_sum, open, exchange);
+        return T::one();
+    }
+    lambda_partial(f, params, rates, shares, eps_sum, exchange)
+}
+
+/// ΩΛ at a fully covered node (`eps_sum` ≥ 1 − [`LAMBDA_FULL_GAP`]): see [`lambda_collide`]. Shared with the
+/// batched pass ([`psm_collide_lanes`]).
+#[inline(always)]
+fn lambda_full<T: Real>(
+    f: &mut [T; Q],
+    shares: &[SolidShare<T>],
+    eps_sum: T,
+    open: OpenLinks,
+    exchange: &mut [[T; 2]],
+) {
+    let rho = density(f);
+    {
         let w = weights::<T>();
         let mut post = [T::zero(); Q];
         for (share, ex) in shares.iter().zip(exchange.iter_mut()) {
@@ -850,8 +885,21 @@ fn lambda_collide<T: Real>(
             *ex = [-mx, -my];
         }
         *f = post;
-        return T::one();
     }
+}
+
+/// ΩΛ at a partly covered node (0 < `eps_sum` < 1 − [`LAMBDA_FULL_GAP`]): see [`lambda_collide`]. Shared with
+/// the batched pass ([`psm_collide_lanes`]).
+#[inline(always)]
+fn lambda_partial<T: Real>(
+    f: &mut [T; Q],
+    params: &PsmParams<T>,
+    rates: Rates<T>,
+    shares: &[SolidShare<T>],
+    eps_sum: T,
+    exchange: &mut [[T; 2]],
+) -> T {
+    let rho = density(f);
     let eps = eps_sum;
     let b = lambda_weighting(params.weighting, eps, rates);
     let one = T::one();
@@ -975,4 +1023,249 @@ pub fn psm_velocity<T: Real>(
         rho,
         lambda_velocity(rho, momentum(f), fb, beta, shares, eps_sum),
     )
+}
+
+/// Nodes per batch of the batched partially-saturated collision ([`psm_collide_lanes`]): eight lanes fill an
+/// AVX-512 register of f64 (two AVX2 registers).
+pub const PSM_LANES: usize = 8;
+
+/// The batch kernel a covered node can take ([`lane_class`]); the other nodes take [`psm_collide_links`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum LaneClass {
+    /// One share, ε > 0, under Ω₁, Ω₂, Ω₃ or Ω₁ₗ.
+    Operator,
+    /// One share, 0 < ε < 1 − [`LAMBDA_FULL_GAP`], under ΩΛ.
+    LambdaPartial,
+    /// One share, ε ≥ 1 − [`LAMBDA_FULL_GAP`], under ΩΛ.
+    LambdaFull,
+}
+
+/// Which batch kernel a node covered by `shares` takes: `None` for a node with several shares (or none) or a
+/// fraction that is not positive (NaN included), which [`psm_collide_links`] treats.
+#[inline(always)]
+pub fn lane_class<T: Real>(params: &PsmParams<T>, shares: &[SolidShare<T>]) -> Option<LaneClass> {
+    let [share] = shares else {
+        return None;
+    };
+    // The sum [`psm_collide_links`] forms, in its order.
+    let eps_sum = T::zero() + share.fraction;
+    if eps_sum.partial_cmp(&T::zero()) != Some(core::cmp::Ordering::Greater) {
+        return None;
+    }
+    Some(match params.solid {
+        SolidOperator::LambdaConsistent if lambda_fully_covered(eps_sum) => LaneClass::LambdaFull,
+        SolidOperator::LambdaConsistent => LaneClass::LambdaPartial,
+        _ => LaneClass::Operator,
+    })
+}
+
+/// A batch of [`PSM_LANES`] covered nodes of one [`LaneClass`], structure of arrays: populations `f[q][lane]`,
+/// each node's single share and open links, and (out) the momentum handed to each share.
+#[derive(Clone, Copy, Debug)]
+pub struct PsmLanes<T> {
+    /// Populations, direction-major: `f[q][lane]`. In: gathered; out: post-collision.
+    pub f: [[T; PSM_LANES]; Q],
+    /// The share covering each node.
+    pub share: [SolidShare<T>; PSM_LANES],
+    /// Open links of each node (read by ΩΛ at fully covered nodes only).
+    pub open: [OpenLinks; PSM_LANES],
+    /// Out: momentum handed to each node's share (as `exchange` of [`psm_collide_links`]).
+    pub exchange: [[T; 2]; PSM_LANES],
+}
+
+impl<T: Real> Default for PsmLanes<T> {
+    fn default() -> Self {
+        Self {
+            f: [[T::zero(); PSM_LANES]; Q],
+            share: [SolidShare::default(); PSM_LANES],
+            open: [0; PSM_LANES],
+            exchange: [[T::zero(); 2]; PSM_LANES],
+        }
+    }
+}
+
+/// Run a body on the first `$n` lanes of `$lanes`: the nodes one after the other, each with its own arithmetic
+/// (so each node's bits are [`psm_collide_links`]'s), in one loop over the lanes with no call and no branch on the
+/// uniform choices (operator, collision, forcing, weighting), which the callers make constants. A macro rather
+/// than a function taking a closure: the closure was not inlined into the loop. The compiler does not vectorise
+/// this loop across nodes (measured: scalar instructions in the final binary); writing each operation as its own
+/// loop over `[T; PSM_LANES]` is the next step (README, "Cost of a covered node").
+macro_rules! for_lanes {
+    ($lanes:expr, $n:expr, |$f:ident, $share:ident, $open:ident| $body:block) => {{
+        let lanes: &mut PsmLanes<_> = $lanes;
+        let n: usize = $n;
+        for l in 0..n.min(PSM_LANES) {
+            let mut $f: [_; Q] = core::array::from_fn(|q| lanes.f[q][l]);
+            let $share = lanes.share[l];
+            let $open = lanes.open[l];
+            let ex = {
+                let $f = &mut $f;
+                $body
+            };
+            for q in 0..Q {
+                lanes.f[q][l] = $f[q];
+            }
+            lanes.exchange[l] = ex;
+        }
+    }};
+}
+
+/// [`operator_collide`] over the lanes with `params` built by the caller from literal variants (so that every
+/// choice in the body is a constant once inlined).
+#[inline(always)]
+fn operator_lanes<T: Real>(lanes: &mut PsmLanes<T>, n: usize, params: &PsmParams<T>, forced: bool) {
+    let rates = params.collision.rates_unchecked(params.tau);
+    for_lanes!(lanes, n, |f, share, _open| {
+        let eps_sum = T::zero() + share.fraction;
+        let eps = if eps_sum > T::one() {
+            T::one()
+        } else {
+            eps_sum
+        };
+        let mut ex = [[T::zero(); 2]];
+        operator_collide(f, params, rates, forced, &[share], eps_sum, eps, &mut ex);
+        ex[0]
+    });
+}
+
+/// The partially-saturated collision of the first `n` (at most [`PSM_LANES`]) nodes of a batch that all take the
+/// kernel `class` ([`lane_class`]; a mismatched class is misuse): bitwise [`psm_collide_links`] of each node (the
+/// same functions, on the same values, in the same order). Lanes from `n` on are left as they are.
+#[inline(always)]
+pub fn psm_collide_lanes<T: Real>(
+    lanes: &mut PsmLanes<T>,
+    n: usize,
+    params: &PsmParams<T>,
+    class: LaneClass,
+) {
+    match class {
+        LaneClass::LambdaFull => for_lanes!(lanes, n, |f, share, open| {
+            let eps_sum = T::zero() + share.fraction;
+            let mut ex = [[T::zero(); 2]];
+            lambda_full(f, &[share], eps_sum, open, &mut ex);
+            ex[0]
+        }),
+        LaneClass::LambdaPartial => match params.weighting {
+            Weighting::NobleTorczynski => lambda_partial_lanes(
+                lanes,
+                n,
+                &PsmParams {
+                    weighting: Weighting::NobleTorczynski,
+                    ..*params
+                },
+            ),
+            Weighting::SolidFraction => lambda_partial_lanes(
+                lanes,
+                n,
+                &PsmParams {
+                    weighting: Weighting::SolidFraction,
+                    ..*params
+                },
+            ),
+        },
+        LaneClass::Operator => operator_dispatch(lanes, n, params),
+    }
+}
+
+/// [`lambda_partial`] over the lanes (`params.weighting` a literal at the call).
+#[inline(always)]
+fn lambda_partial_lanes<T: Real>(lanes: &mut PsmLanes<T>, n: usize, params: &PsmParams<T>) {
+    let rates = params.collision.rates_unchecked(params.tau);
+    for_lanes!(lanes, n, |f, share, _open| {
+        let eps_sum = T::zero() + share.fraction;
+        let mut ex = [[T::zero(); 2]];
+        lambda_partial(f, params, rates, &[share], eps_sum, &mut ex);
+        ex[0]
+    });
+}
+
+/// [`operator_lanes`] with every uniform choice (operator, collision, forcing, weighting) turned into a literal.
+#[inline(always)]
+fn operator_dispatch<T: Real>(lanes: &mut PsmLanes<T>, n: usize, params: &PsmParams<T>) {
+    let forced = params.force[0] != T::zero() || params.force[1] != T::zero();
+    let zero = [T::zero(); 2];
+    macro_rules! go {
+        ($solid:expr, $collision:expr) => {
+            match (params.weighting, forced) {
+                (Weighting::NobleTorczynski, false) => operator_lanes(
+                    lanes,
+                    n,
+                    &PsmParams {
+                        tau: params.tau,
+                        weighting: Weighting::NobleTorczynski,
+                        solid: $solid,
+                        force: zero,
+                        collision: $collision,
+                    },
+                    false,
+                ),
+                (Weighting::SolidFraction, false) => operator_lanes(
+                    lanes,
+                    n,
+                    &PsmParams {
+                        tau: params.tau,
+                        weighting: Weighting::SolidFraction,
+                        solid: $solid,
+                        force: zero,
+                        collision: $collision,
+                    },
+                    false,
+                ),
+                (Weighting::NobleTorczynski, true) => operator_lanes(
+                    lanes,
+                    n,
+                    &PsmParams {
+                        tau: params.tau,
+                        weighting: Weighting::NobleTorczynski,
+                        solid: $solid,
+                        force: params.force,
+                        collision: $collision,
+                    },
+                    true,
+                ),
+                (Weighting::SolidFraction, true) => operator_lanes(
+                    lanes,
+                    n,
+                    &PsmParams {
+                        tau: params.tau,
+                        weighting: Weighting::SolidFraction,
+                        solid: $solid,
+                        force: params.force,
+                        collision: $collision,
+                    },
+                    true,
+                ),
+            }
+        };
+    }
+    macro_rules! by_collision {
+        ($solid:expr) => {
+            match params.collision {
+                Collision::Bgk => go!($solid, Collision::Bgk),
+                Collision::Trt(t) => go!($solid, Collision::Trt(Trt { magic: t.magic })),
+            }
+        };
+    }
+    match params.solid {
+        SolidOperator::NonEquilibriumBounceBack => {
+            by_collision!(SolidOperator::NonEquilibriumBounceBack)
+        }
+        SolidOperator::Superposition => by_collision!(SolidOperator::Superposition),
+        SolidOperator::MovingWallBounceBack => by_collision!(SolidOperator::MovingWallBounceBack),
+        SolidOperator::LinearizedNonEquilibriumBounceBack => {
+            by_collision!(SolidOperator::LinearizedNonEquilibriumBounceBack)
+        }
+        // Not an operator-class node ([`lane_class`]); the scalar kernel, node by node, in case of misuse.
+        SolidOperator::LambdaConsistent => {
+            for l in 0..n.min(PSM_LANES) {
+                let mut f: [T; Q] = core::array::from_fn(|q| lanes.f[q][l]);
+                let mut ex = [[T::zero(); 2]];
+                psm_collide_links(&mut f, params, &[lanes.share[l]], lanes.open[l], &mut ex);
+                for (q, fq) in f.iter().enumerate() {
+                    lanes.f[q][l] = *fq;
+                }
+                lanes.exchange[l] = ex[0];
+            }
+        }
+    }
 }

@@ -22,8 +22,9 @@
 use super::aa::{load_post_collision, Layout};
 use super::boundary::{zou_he, zou_he_corner, Boundaries, SideCondition, SideProfiles};
 use super::collide::{
-    bgk_collide, bgk_collide_forced, fluid_collide, psm_collide_links, trt_collide,
-    trt_collide_forced, Collision, OpenLinks, PsmParams, SolidShare,
+    bgk_collide, bgk_collide_forced, fluid_collide, lane_class, psm_collide_lanes,
+    psm_collide_links, trt_collide, trt_collide_forced, Collision, LaneClass, OpenLinks, PsmLanes,
+    PsmParams, SolidShare, PSM_LANES,
 };
 use super::d2q9::{density, equilibrium, velocity, weights, OPPOSITE, Q, VELOCITIES};
 use super::lattice::{wrap_row, LatticeShape, Neighbour, Side};
@@ -598,7 +599,7 @@ pub fn covered_node_value<T: Real>(
 
 /// Redo the covered nodes of a band with the partially-saturated collision. `exchange` receives the momentum
 /// handed to each share (force on the solid, lattice units); it covers the shares from
-/// `covered.offsets[0]` on. Covered nodes that are solid obstacle nodes are skipped.
+/// `covered.offsets[0]` on. Covered nodes that are solid obstacle nodes are skipped (zero exchange).
 pub fn collide_covered_nodes<T: Real>(
     domain: &Domain<'_, T>,
     src: &[T],
@@ -608,21 +609,160 @@ pub fn collide_covered_nodes<T: Real>(
     covered: CoveredNodes<'_, T>,
     exchange: &mut [[T; 2]],
 ) {
-    let base = y0 * domain.shape.nx;
-    let first = covered.offsets.first().copied().unwrap_or(0) as usize;
-    for (k, &node) in covered.nodes.iter().enumerate() {
-        let n = node as usize;
-        let (a, b) = (covered.offsets[k] as usize, covered.offsets[k + 1] as usize);
-        let ex = &mut exchange[a - first..b - first];
-        let shares = &covered.shares[a..b];
-        let open = covered.links[k];
-        if let Some(f) =
-            covered_node_value(domain, src, Layout::Collided, params, n, shares, open, ex)
-        {
+    let (shape, bc, flags) = (&domain.shape, &domain.bc, domain.flags);
+    let base = y0 * shape.nx;
+    let nodes = covered.nodes;
+    collide_covered_list(
+        params,
+        covered.offsets,
+        covered.shares,
+        covered.links,
+        exchange,
+        |k| {
+            let n = nodes[k] as usize;
+            (flags[n] != SOLID).then(|| {
+                let (x, y) = shape.coords(n);
+                gather_node_in(
+                    shape,
+                    src,
+                    Layout::Collided,
+                    bc,
+                    &domain.profiles,
+                    flags,
+                    x,
+                    y,
+                )
+            })
+        },
+        |k, f| {
+            let n = nodes[k] as usize;
             for q in 0..Q {
                 dst[q][n - base] = f[q];
             }
+        },
+    );
+    // A covered solid obstacle node hands nothing to its solids (as [`covered_node_value`]).
+    let first = covered.offsets.first().copied().unwrap_or(0) as usize;
+    for (k, &node) in nodes.iter().enumerate() {
+        if flags[node as usize] == SOLID {
+            let (a, b) = (covered.offsets[k] as usize, covered.offsets[k + 1] as usize);
+            for e in &mut exchange[a - first..b - first] {
+                *e = [T::zero(); 2];
+            }
         }
+    }
+}
+
+/// The partially-saturated collision of a list of covered nodes, batched: node k (0 ≤ k < `links.len()`) has
+/// the shares `shares[offsets[k] .. offsets[k + 1]]` (absolute indices) and open links `links[k]`; `load(k)`
+/// gives its gathered populations (`None`: the node is left alone, its exchange entries untouched), `store(k,
+/// f)` receives its post-collision populations, and `exchange` (entries from `offsets[0]` on) the momentum
+/// handed to each share.
+///
+/// The nodes with one share and ε > 0 (the common case: [`lane_class`]) are queued by kernel and collided
+/// [`PSM_LANES`] at a time by [`psm_collide_lanes`]; the others node by node by [`psm_collide_links`]. Every
+/// node gets bitwise what [`psm_collide_links`] gives it (the batch kernel runs the same functions on the same
+/// values); only the order in which `store` is called differs.
+#[inline(always)]
+pub fn collide_covered_list<T: Real>(
+    params: &PsmParams<T>,
+    offsets: &[u32],
+    shares: &[SolidShare<T>],
+    links: &[OpenLinks],
+    exchange: &mut [[T; 2]],
+    mut load: impl FnMut(usize) -> Option<[T; Q]>,
+    mut store: impl FnMut(usize, [T; Q]),
+) {
+    let first = offsets.first().copied().unwrap_or(0) as usize;
+    let mut queues: [LaneQueue<T>; 3] = core::array::from_fn(|_| LaneQueue {
+        lanes: PsmLanes::default(),
+        nodes: [0; PSM_LANES],
+        len: 0,
+    });
+    let slot = |c: LaneClass| match c {
+        LaneClass::Operator => 0,
+        LaneClass::LambdaPartial => 1,
+        LaneClass::LambdaFull => 2,
+    };
+    const CLASSES: [LaneClass; 3] = [
+        LaneClass::Operator,
+        LaneClass::LambdaPartial,
+        LaneClass::LambdaFull,
+    ];
+    for k in 0..links.len() {
+        let Some(mut f) = load(k) else {
+            continue;
+        };
+        let (a, b) = (offsets[k] as usize, offsets[k + 1] as usize);
+        let node_shares = &shares[a..b];
+        match lane_class(params, node_shares) {
+            Some(class) => {
+                let q = &mut queues[slot(class)];
+                let l = q.len;
+                for (p, fp) in f.iter().enumerate() {
+                    q.lanes.f[p][l] = *fp;
+                }
+                q.lanes.share[l] = node_shares[0];
+                q.lanes.open[l] = links[k];
+                q.nodes[l] = k;
+                q.len += 1;
+                if q.len == PSM_LANES {
+                    q.flush(class, params, offsets, exchange, &mut store);
+                }
+            }
+            None => {
+                psm_collide_links(
+                    &mut f,
+                    params,
+                    node_shares,
+                    links[k],
+                    &mut exchange[a - first..b - first],
+                );
+                store(k, f);
+            }
+        }
+    }
+    for (q, class) in queues.iter_mut().zip(CLASSES) {
+        if q.len > 0 {
+            q.flush(class, params, offsets, exchange, &mut store);
+        }
+    }
+}
+
+/// A batch being filled by [`collide_covered_list`]: the lanes, the list index of each lane's node, the fill.
+struct LaneQueue<T> {
+    lanes: PsmLanes<T>,
+    nodes: [usize; PSM_LANES],
+    len: usize,
+}
+
+impl<T: Real> LaneQueue<T> {
+    /// Collide the first `len` lanes with the batch kernel `class` and hand the results out; empties the queue.
+    #[inline(always)]
+    fn flush(
+        &mut self,
+        class: LaneClass,
+        params: &PsmParams<T>,
+        offsets: &[u32],
+        exchange: &mut [[T; 2]],
+        store: &mut impl FnMut(usize, [T; Q]),
+    ) {
+        let first = offsets.first().copied().unwrap_or(0) as usize;
+        // Unused lanes repeat lane 0 (finite values; their results are dropped).
+        for l in self.len..PSM_LANES {
+            for p in 0..Q {
+                self.lanes.f[p][l] = self.lanes.f[p][0];
+            }
+            self.lanes.share[l] = self.lanes.share[0];
+            self.lanes.open[l] = self.lanes.open[0];
+        }
+        psm_collide_lanes(&mut self.lanes, PSM_LANES, params, class);
+        for l in 0..self.len {
+            let k = self.nodes[l];
+            store(k, core::array::from_fn(|p| self.lanes.f[p][l]));
+            exchange[offsets[k] as usize - first] = self.lanes.exchange[l];
+        }
+        self.len = 0;
     }
 }
 
