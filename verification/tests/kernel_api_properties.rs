@@ -44,8 +44,8 @@ use lbdem_kernels::fluid::boundary::{
     Boundaries, SideCondition, SideProfiles,
 };
 use lbdem_kernels::fluid::collide::{
-    guo_source, lambda_fully_covered, lambda_weighting, Collision, Rates, SolidOperator, Trt,
-    Weighting, LAMBDA_FULL_GAP,
+    guo_source, lambda_fully_covered, lambda_weighting, lane_class, Collision, LaneClass,
+    PsmParams, Rates, SolidOperator, SolidShare, Trt, Weighting, LAMBDA_FULL_GAP,
 };
 use lbdem_kernels::fluid::d2q9::{density, equilibrium, momentum, velocity, Q};
 use lbdem_kernels::fluid::lattice::{wrap_row, LatticeShape};
@@ -938,5 +938,41 @@ proptest! {
         let stress = s.bond_normal * delta;
         let strain = delta / (ra + rb);
         prop_assert!((stress / strain / ebar - 1.0).abs() <= GEOMETRY);
+    }
+}
+
+proptest! {
+    #![proptest_config(config(256))]
+
+    /// The batch class of a covered node, against its definition: one share with ε > 0 (NaN and ε ≤ 0
+    /// excluded), under ΩΛ split at 1 − LAMBDA_FULL_GAP, every other operator one class; several shares or
+    /// none: no class.
+    #[test]
+    fn lane_class_follows_the_share_count_fraction_and_operator(
+        eps in prop_oneof![Just(f64::NAN), Just(0.0), Just(-0.0), -0.5f64..1.5, 0.998f64..1.0],
+        extra in 0usize..3,
+        op in 0usize..5,
+    ) {
+        let solid = SolidOperator::ALL[op];
+        let params = PsmParams {
+            tau: 0.8,
+            weighting: solid.weighting(),
+            force: [0.0; 2],
+            solid,
+            collision: Collision::Bgk,
+        };
+        let share = SolidShare { fraction: eps, velocity: [0.01, -0.02] };
+        let shares = vec![share; 1 + extra];
+        let expected = if extra > 0 || eps.is_nan() || eps <= 0.0 {
+            None
+        } else if solid != SolidOperator::LambdaConsistent {
+            Some(LaneClass::Operator)
+        } else if eps >= 1.0 - LAMBDA_FULL_GAP {
+            Some(LaneClass::LambdaFull)
+        } else {
+            Some(LaneClass::LambdaPartial)
+        };
+        prop_assert_eq!(lane_class(&params, &shares), expected);
+        prop_assert_eq!(lane_class(&params, &[]), None);
     }
 }
