@@ -265,9 +265,7 @@ pub fn candidate_pairs<T: Real>(
             if j <= i || j >= n {
                 continue;
             }
-            let d = [positions[j][0] - pi[0], positions[j][1] - pi[1]];
-            let reach = bounding_radii[i] + bounding_radii[j] + margin;
-            if d[0] * d[0] + d[1] * d[1] < reach * reach {
+            if within_reach(positions, bounding_radii, margin, i, j) {
                 if let Some(slot) = pairs.get_mut(stored) {
                     *slot = [i, j];
                     stored += 1;
@@ -277,6 +275,22 @@ pub fn candidate_pairs<T: Real>(
         }
     }
     Ok(PairCount { found, stored })
+}
+
+/// The pair test of [`candidate_pairs`] and [`filter_candidate_pairs`] (one expression, so the two list
+/// bitwise the same pairs): the bounding circles of i and j come within `margin` of each other.
+#[inline(always)]
+fn within_reach<T: Real>(
+    positions: &[Vector<T>],
+    bounding_radii: &[T],
+    margin: T,
+    i: usize,
+    j: usize,
+) -> bool {
+    let (pi, pj) = (positions[i], positions[j]);
+    let d = [pj[0] - pi[0], pj[1] - pi[1]];
+    let reach = bounding_radii[i] + bounding_radii[j] + margin;
+    d[0] * d[0] + d[1] * d[1] < reach * reach
 }
 
 /// Copy per-pair values (e.g. the shear history) from `previous_pairs` to `pairs`, both sorted ascending
@@ -331,10 +345,7 @@ pub fn filter_candidate_pairs<T: Real>(
         if i >= n || j >= n || j <= i {
             continue;
         }
-        let pi = positions[i];
-        let d = [positions[j][0] - pi[0], positions[j][1] - pi[1]];
-        let reach = bounding_radii[i] + bounding_radii[j] + margin;
-        if d[0] * d[0] + d[1] * d[1] < reach * reach {
+        if within_reach(positions, bounding_radii, margin, i, j) {
             if let Some(slot) = pairs.get_mut(stored) {
                 *slot = [i, j];
                 stored += 1;
