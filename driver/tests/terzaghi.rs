@@ -4,7 +4,7 @@
 //! `lbdem_reference::poroelastic`) and the pore-pressure profiles compared with Terzaghi's series.
 use std::path::Path;
 
-use lbdem::kinds::terzaghi::{self, Terzaghi, TerzaghiScene};
+use lbdem::kinds::terzaghi::{self, DrainedSurface, Terzaghi, TerzaghiScene};
 use lbdem::run::Case;
 
 fn scene() -> TerzaghiScene {
@@ -55,6 +55,15 @@ fn independent_measurements_predict_the_consolidation_coefficient_of_a_random_pa
         c.fitted_coefficient,
         p.consolidation_coefficient
     );
+    // The Gibbs dividing surface of the top layer is measured (the comparison keeps the pack top by default):
+    // below the top and within a grain diameter of it (measured 0.033 cm here, 0.115 cm on the bundled
+    // scene; grains 0.08–0.12 cm in radius).
+    assert_eq!(p.drained_depth, 0.0);
+    assert!(
+        p.dividing_surface_depth > 0.0 && p.dividing_surface_depth < 0.24,
+        "dividing surface {}",
+        p.dividing_surface_depth
+    );
     // The drained top stays at zero (the Zou–He boundary above the free layer holds P = 0).
     let last = profiles.last().unwrap();
     let top = last.rows.iter().find(|r| r[0] < 0.02).unwrap();
@@ -77,6 +86,35 @@ fn terzaghi_profiles_within_three_percent_after_start_up() {
     let c = &o.comparison;
     eprintln!("{:#?}\n{c:#?}", o.prediction);
     assert!((c.fitted_over_predicted - 1.0).abs() < 0.10);
+    assert!(
+        c.rms_over_gamma_load <= 0.03,
+        "RMS {}",
+        c.rms_over_gamma_load
+    );
+}
+
+/// The bundled scene with a 1 s sin² load ramp (10 % of L²/c_v), compared from the ramp's end with the
+/// ramped solution drained at the measured Gibbs dividing surface of the pack's top layer
+/// (`drained_surface = "dividing_surface"`; `cargo test -p lbdem --test terzaghi -- --ignored`, 45–80 s,
+/// hence not in the default suite). Measured 2026-12-03: δ = 0.115 cm, RMS 2.89 % of γσ₀, fit −8.6 %: both
+/// criteria of issue 14 met, narrowly, for this loading; the step load (5.9 %) and the short column
+/// (δ = 0.033 cm, fit −12.6 %) do not meet them that way (README).
+#[test]
+#[ignore = "full-size variant, 45-80 s; README, Poroelastic validation"]
+fn ramped_load_drained_at_the_dividing_surface_within_three_percent() {
+    let mut s = scene();
+    s.terzaghi.load_ramp = Some(1.0);
+    s.terzaghi.drained_surface = Some(DrainedSurface::DividingSurface);
+    let (o, _) = terzaghi::simulate(&Case::<Terzaghi>::new(s).unwrap()).unwrap();
+    let (p, c) = (&o.prediction, &o.comparison);
+    eprintln!("{p:#?}\n{c:#?}");
+    assert!(p.drained_depth > 0.0 && p.drained_depth == p.dividing_surface_depth);
+    // Issue 14's criteria, not loosened.
+    assert!(
+        (c.fitted_over_predicted - 1.0).abs() < 0.10,
+        "fit {}",
+        c.fitted_over_predicted
+    );
     assert!(
         c.rms_over_gamma_load <= 0.03,
         "RMS {}",

@@ -25,7 +25,7 @@ use crate::error::{non_negative, positive, LbdemError, Result};
 use crate::input::limits::{self, Budget};
 use crate::observe::darcy::{permeability, SteadyFlow};
 use crate::observe::fit::fit_consolidation;
-use crate::observe::flow::fluid_row_means;
+use crate::observe::flow::{dividing_surface_depth, fluid_row_means};
 use crate::observe::health::{coupled_health, finite};
 use crate::observe::steady::Steadiness;
 use crate::output::snapshots::{chunk_with_snapshots, write_coupled_at_step, SnapshotClock};
@@ -133,6 +133,23 @@ pub struct TerzaghiSection {
     /// Terzaghi's solution for that loading ([`terzaghi_pressure_ramped`]) from the end of the ramp on.
     #[serde(default)]
     pub load_ramp: Option<f64>,
+    /// Where Terzaghi's solution puts the drained surface: absent or `"pack_top"`, at the top of the pack
+    /// (the top platen the pack was made against); `"dividing_surface"`, at the Gibbs dividing surface of the
+    /// pack's top layer measured at t = 0 ([`crate::observe::flow::dividing_surface_depth`]), the column
+    /// then being L − δ long.
+    #[serde(default)]
+    pub drained_surface: Option<DrainedSurface>,
+}
+
+/// Position of the drained surface in the comparison with Terzaghi's solution.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum DrainedSurface {
+    /// At the top of the pack.
+    #[default]
+    PackTop,
+    /// At the measured Gibbs dividing surface of the top layer.
+    DividingSurface,
 }
 
 /// A Terzaghi scene file.
@@ -194,6 +211,32 @@ pub struct Prediction {
     pub sound_crossing_time: f64,
     /// Diffusion time L²/c_v.
     pub diffusion_time: f64,
+    /// Depth δ below the pack top of the Gibbs dividing surface of its top layer, measured on the coupled
+    /// lattice's coverage at t = 0 ([`crate::observe::flow::dividing_surface_depth`]).
+    #[serde(default)]
+    pub dividing_surface_depth: f64,
+    /// Depth of the drained surface in the comparison: δ with `drained_surface = "dividing_surface"`, else 0.
+    #[serde(default)]
+    pub drained_depth: f64,
+}
+
+impl Prediction {
+    /// γ × Terzaghi's solution (for the loading of the scene: a step, or the ramp `ramp`) at `depth` below
+    /// the pack top and time `time`: a column of length L − d drained at depth d (zero pressure above it).
+    pub fn pressure_over_load(&self, depth: f64, time: f64, ramp: f64) -> f64 {
+        let d = self.drained_depth;
+        if depth <= d {
+            return 0.0;
+        }
+        self.loading_efficiency
+            * terzaghi_pressure_ramped(
+                depth - d,
+                time,
+                self.consolidation_coefficient,
+                self.thickness - d,
+                ramp,
+            )
+    }
 }
 
 /// One pore-pressure profile: time since the step and (depth below the top, p/σ₀) per lattice row.
@@ -424,6 +467,19 @@ fn start(case: &Case<Terzaghi>, exec: &Exec) -> Result<TerzaghiState> {
         .cover_with_bodies(&world.bodies(), world.weighting);
     let eps = world.fluid.solid_fraction_map();
     let porosity = 1.0 - eps[..pack_rows * nx].iter().sum::<f64>() / (pack_rows * nx) as f64;
+    let dividing = dividing_surface_depth(&eps, nx, pack_rows, h);
+    let drained_depth = match c.drained_surface.unwrap_or_default() {
+        DrainedSurface::PackTop => 0.0,
+        DrainedSurface::DividingSurface => dividing,
+    };
+    if drained_depth >= 0.5 * thickness {
+        return Err(LbdemError::field(
+            "terzaghi.drained_surface",
+            format!("{dividing:.4e}"),
+            "the measured dividing surface lies in the lower half of the column: its top layer is not a surface",
+            "use \"pack_top\", or a taller column of smaller grains",
+        ));
+    }
     let steps = u.time_to_steps(c.duration).round().max(10.0) as u64;
     let record_every = (u.time_to_steps(c.record_interval).round() as u64).max(1);
     let prediction = Prediction {
@@ -444,6 +500,8 @@ fn start(case: &Case<Terzaghi>, exec: &Exec) -> Result<TerzaghiState> {
         consolidation_coefficient: f64::NAN,
         sound_crossing_time: thickness / u.sound_speed,
         diffusion_time: f64::NAN,
+        dividing_surface_depth: dividing,
+        drained_depth,
     };
     let grains = world.dem.particles.len();
     Ok(TerzaghiState {
@@ -570,7 +628,8 @@ impl TerzaghiState {
             }
             eprintln!(
                 "lbdem: terzaghi: K_v = {:.4e}, k = {:.4e}, n = {:.4}, storage porosity {:.4}: S = {:.4e} (fluid \
-                 {:.4e}, skeleton {:.4e}), gamma = {:.4}, c_v = {:.4e}",
+                 {:.4e}, skeleton {:.4e}), gamma = {:.4}, c_v = {:.4e}; dividing surface {:.4e} below the pack \
+                 top, drained surface at {:.4e}",
                 p.drained_modulus,
                 p.permeability,
                 p.porosity,
@@ -579,7 +638,9 @@ impl TerzaghiState {
                 p.storage_fluid,
                 p.storage_skeleton,
                 p.loading_efficiency,
-                p.consolidation_coefficient
+                p.consolidation_coefficient,
+                p.dividing_surface_depth,
+                p.drained_depth
             );
             self.darcy = None;
             // The step load.
@@ -641,10 +702,11 @@ impl TerzaghiState {
     /// The comparison of the profiles after the start-up with Terzaghi's solution (γ and c_v predicted).
     pub fn comparison(&self, radius_max: f64, ramp: f64) -> Comparison {
         let p = &self.prediction;
-        let (gamma, cv, l) = (
+        let (gamma, cv, l, d0) = (
             p.loading_efficiency,
             p.consolidation_coefficient,
             p.thickness,
+            p.drained_depth,
         );
         // After the start-up, and not before the load is fully on.
         let t0 = (STARTUP_CROSSINGS * p.sound_crossing_time).max(ramp);
@@ -670,17 +732,17 @@ impl TerzaghiState {
             }
             records += 1;
             for d in &r.rows {
-                let theory = gamma * terzaghi_pressure_ramped(d[0].max(0.0), r.time, cv, l, ramp);
+                let theory = p.pressure_over_load(d[0], r.time, ramp);
                 sq += (d[1] - theory).powi(2);
                 // The free fit uses the step solution: from the ramp's middle, its equivalent step (exact to
-                // O((c_v t_r/L²)²), [`terzaghi_pressure_ramped`]).
-                samples.push((d[0].max(0.0), r.time - 0.5 * ramp, d[1] / gamma));
+                // O((c_v t_r/L²)²), [`terzaghi_pressure_ramped`]); depths from the drained surface.
+                samples.push(((d[0] - d0).max(0.0), r.time - 0.5 * ramp, d[1] / gamma));
             }
         }
         let n = samples.len();
         let rms = (sq / n.max(1) as f64).sqrt() / gamma;
         let (fit, fit_rms, _) = if n > 0 {
-            fit_consolidation(&samples, l, cv)
+            fit_consolidation(&samples, l - d0, cv)
         } else {
             (f64::NAN, f64::NAN, 0)
         };
@@ -1034,14 +1096,7 @@ impl Kind for Terzaghi {
         let rows = state.profiles.iter().flat_map(|r| {
             r.rows.iter().map(move |d| {
                 let theory = if p.consolidation_coefficient.is_finite() {
-                    p.loading_efficiency
-                        * terzaghi_pressure_ramped(
-                            d[0].max(0.0),
-                            r.time,
-                            p.consolidation_coefficient,
-                            p.thickness,
-                            ramp,
-                        )
+                    p.pressure_over_load(d[0], r.time, ramp)
                 } else {
                     f64::NAN
                 };
