@@ -797,3 +797,47 @@ proptest! {
         prop_assert!(pair_contacts_placed(&m, &ps, &placed[..1], &pairs, &mut shear_p, dt, &mut slots_p).is_err());
     }
 }
+
+/// The stiffness a parallel bond adds for the critical step (Potyondy & Cundall 2004, eq. 6 per unit
+/// thickness in 2-D): translational max(k̄_n, k̄_s) A with A = 2R̄, rotational k̄_n I + k̄_s A R² with
+/// I = 2R̄³/3 and R the particle's lever arm — evaluated here by hand for one bond, term by term.
+#[test]
+fn parallel_bond_stiffness_is_the_area_and_inertia_formula() {
+    let bond = Bond {
+        pair: [0, 1],
+        law: BondLaw::Parallel {
+            bond: ParallelBond {
+                radius: 0.05f64,
+                normal_stiffness: 2e6,
+                shear_stiffness: 1e6,
+                tensile_strength: 1e3,
+                shear_strength: 1e3,
+                normal_force: 0.0,
+                shear_force: 0.0,
+                moment: 0.0,
+                intact: true,
+            },
+            radii: [0.1, 0.1],
+        },
+    };
+    let (kt, kr) = bond.stiffness(0.1);
+    // A = 0.1, I = 2 × 1.25e-4 / 3; k̄_n I = 2e6 × 8.333…e-5 = 166.666…, k̄_s A R² = 1e6 × 0.1 × 0.01 = 1000.
+    // Tolerance: roundoff of a few products.
+    assert!((kt - 2e5).abs() < 1e-9 * 2e5, "{kt}");
+    assert!((kr - (500.0 / 3.0 + 1000.0)).abs() < 1e-9 * 1200.0, "{kr}");
+    // The shear term takes over the translational stiffness when it is the larger.
+    let Bond {
+        law: BondLaw::Parallel { mut bond, radii },
+        pair,
+    } = bond
+    else {
+        unreachable!()
+    };
+    bond.shear_stiffness = 3e6;
+    let (kt, _) = Bond {
+        pair,
+        law: BondLaw::Parallel { bond, radii },
+    }
+    .stiffness(0.1);
+    assert!((kt - 3e5).abs() < 1e-9 * 3e5, "{kt}");
+}
