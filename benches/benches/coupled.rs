@@ -18,6 +18,7 @@
 #[path = "../src/coupled_scene.rs"]
 mod coupled_scene;
 
+use lbdem_benches::load_average;
 use std::collections::BTreeMap;
 use std::sync::Mutex;
 use std::time::{Duration, Instant};
@@ -203,11 +204,4 @@ fn main() {
         load_average(),
         std::thread::available_parallelism().map_or(0, |n| n.get())
     );
-}
-
-/// The 1-, 5- and 15-minute load averages, as `/proc/loadavg` gives them (empty where unavailable).
-fn load_average() -> String {
-    std::fs::read_to_string("/proc/loadavg")
-        .map(|s| s.split_whitespace().take(3).collect::<Vec<_>>().join(" "))
-        .unwrap_or_default()
 }

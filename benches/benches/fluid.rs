@@ -31,6 +31,7 @@
 //! scheme. Every case runs in place (AA) at the widest level the CPU has; the 2048² BGK cases also run with the
 //! two-lattice scheme and at the baseline level, and the PSM cases with the two-lattice scheme, so the table
 //! shows what each gains.
+use lbdem_benches::load_average;
 use std::collections::BTreeMap;
 use std::sync::Mutex;
 use std::time::{Duration, Instant};
@@ -365,13 +366,6 @@ fn print_summary() {
             }
         }
     }
-}
-
-/// The 1-, 5- and 15-minute load averages, as `/proc/loadavg` gives them (empty where unavailable).
-fn load_average() -> String {
-    std::fs::read_to_string("/proc/loadavg")
-        .map(|s| s.split_whitespace().take(3).collect::<Vec<_>>().join(" "))
-        .unwrap_or_default()
 }
 
 fn main() {

@@ -17,59 +17,12 @@
 #[path = "../src/coupled_scene.rs"]
 mod coupled_scene;
 
+use lbdem_benches::{cpu_seconds, load_average, quartiles};
 use std::time::Instant;
 
 use lbdem::engine::coupled::CoupledWorld;
 use lbdem::engine::lattice::FluidLattice;
-use lbdem_kernels::fluid::boundary::{Boundaries, SideCondition};
-use lbdem_kernels::fluid::step::FluidParams;
 use lbdem_kernels::Real;
-
-/// The BGK lattice: the coupled scene's lattice without grains (same sides, τ, streaming).
-fn bgk_lattice<T: Real>(nx: usize, ny: usize) -> FluidLattice<T> {
-    let bc = Boundaries {
-        west: SideCondition::Pressure {
-            density: T::lit(1.001),
-        },
-        east: SideCondition::Pressure {
-            density: T::lit(1.0),
-        },
-        south: SideCondition::Wall,
-        north: SideCondition::Wall,
-    };
-    let params = FluidParams {
-        tau: T::lit(0.8),
-        force: [T::zero(); 2],
-    };
-    let mut l = FluidLattice::<T>::new(nx, ny, bc, params).expect("BGK lattice");
-    l.set_streaming(coupled_scene::streaming());
-    l
-}
-
-/// CPU seconds this process has used (user + system, `/proc/self/stat` fields 14 and 15, 100 ticks per second on
-/// Linux); 0 where unavailable.
-fn cpu_seconds() -> f64 {
-    std::fs::read_to_string("/proc/self/stat")
-        .ok()
-        .and_then(|s| {
-            let rest = s.rsplit(')').next()?.to_string();
-            let f: Vec<&str> = rest.split_whitespace().collect();
-            Some((f.get(11)?.parse::<f64>().ok()? + f.get(12)?.parse::<f64>().ok()?) / 100.0)
-        })
-        .unwrap_or(0.0)
-}
-
-fn quartiles(mut v: Vec<f64>) -> [f64; 3] {
-    v.sort_by(f64::total_cmp);
-    let q = |p: f64| v[((v.len() - 1) as f64 * p).round() as usize];
-    [q(0.25), q(0.5), q(0.75)]
-}
-
-fn load() -> String {
-    std::fs::read_to_string("/proc/loadavg")
-        .map(|s| s.split_whitespace().take(3).collect::<Vec<_>>().join(" "))
-        .unwrap_or_default()
-}
 
 fn run<T: Real>(
     dem: &lbdem::engine::dem::DemWorld<f64>,
@@ -86,7 +39,7 @@ fn run<T: Real>(
     pool.install(|| {
         let mut coupled: CoupledWorld<T> =
             coupled_scene::coupled_world::<T>(dem, nx, ny, 0.7);
-        let mut bgk = bgk_lattice::<T>(nx, ny);
+        let mut bgk = coupled_scene::plain_lattice::<T>(nx, ny);
         // Warm-up (first touch by this pool).
         for _ in 0..3 {
             coupled.step();
@@ -163,7 +116,7 @@ fn main() {
     };
     let (nx, ny, block, rounds) = (num(0, 1000), num(1, 500), num(2, 20), num(3, 15));
     let prec = args.get(4).map_or("f64", |s| s.as_str());
-    let load_before = load();
+    let load_before = load_average();
     let start = Instant::now();
     let dem = coupled_scene::packed_grains();
     println!(
@@ -182,7 +135,7 @@ fn main() {
     }
     println!(
         "load average before: {load_before}; after: {} ({} CPUs)",
-        load(),
+        load_average(),
         std::thread::available_parallelism().map_or(0, |n| n.get())
     );
 }

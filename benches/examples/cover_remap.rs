@@ -11,6 +11,7 @@
 //! machine), a checksum of the solid-fraction map (equal across versions with the same coverage kernel: the
 //! re-mapping itself is bitwise the same), the solid area, and the number of nodes with a roundoff-level
 //! (0 < ε < 1e-9) or an exactly full (ε = 1) solid fraction.
+use lbdem_benches::cpu_seconds;
 use std::time::Instant;
 
 use lbdem::engine::lattice::FluidLattice;
@@ -48,18 +49,6 @@ fn bodies(call: u64) -> Vec<CoupledBody<f64>> {
             }
         })
         .collect()
-}
-
-fn cpu_seconds() -> f64 {
-    // utime + stime of this process, in clock ticks (fields 14 and 15 of /proc/self/stat; 100 Hz on Linux).
-    std::fs::read_to_string("/proc/self/stat")
-        .ok()
-        .and_then(|s| {
-            let rest = s.rsplit(')').next()?.to_string();
-            let f: Vec<&str> = rest.split_whitespace().collect();
-            Some((f.get(11)?.parse::<f64>().ok()? + f.get(12)?.parse::<f64>().ok()?) / 100.0)
-        })
-        .unwrap_or(0.0)
 }
 
 fn main() {

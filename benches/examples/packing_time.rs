@@ -9,22 +9,11 @@
 //! isotropic stress converged, the size factor, the wall stresses, the unbalanced-force ratio, the bonds, and a
 //! checksum of every particle's position, angle and semi-axes bits and every bond's pair (equal checksums:
 //! bitwise-identical packings).
+use lbdem_benches::cpu_seconds;
 use std::time::Instant;
 
 use lbdem::kinds::fracture::{pack, FractureScene};
 use lbdem_kernels::dem::shape::Shape;
-
-/// Process CPU time (user + system) in seconds, from /proc/self/stat (Linux); 0 when unreadable.
-fn cpu_seconds() -> f64 {
-    let Ok(stat) = std::fs::read_to_string("/proc/self/stat") else {
-        return 0.0;
-    };
-    // Fields after the parenthesised command name; utime and stime are fields 14 and 15 (1-based).
-    let rest = stat.rsplit_once(')').map(|(_, r)| r).unwrap_or("");
-    let f: Vec<&str> = rest.split_whitespace().collect();
-    let ticks = |k: usize| f.get(k).and_then(|v| v.parse::<f64>().ok()).unwrap_or(0.0);
-    (ticks(11) + ticks(12)) / 100.0
-}
 
 /// FNV-1a over 64-bit words.
 fn fnv(h: &mut u64, w: u64) {

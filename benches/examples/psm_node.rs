@@ -14,51 +14,13 @@
 mod coupled_scene;
 
 use lbdem::engine::lattice::FluidLattice;
-use lbdem_kernels::fluid::boundary::{Boundaries, SideCondition};
+use lbdem_benches::{cpu_seconds, load_average, quartiles};
 use lbdem_kernels::fluid::collide::{Collision, SolidOperator, Trt};
-use lbdem_kernels::fluid::step::FluidParams;
 use lbdem_kernels::Real;
 
-fn cpu_seconds() -> f64 {
-    std::fs::read_to_string("/proc/self/stat")
-        .ok()
-        .and_then(|s| {
-            let rest = s.rsplit(')').next()?.to_string();
-            let f: Vec<&str> = rest.split_whitespace().collect();
-            Some((f.get(11)?.parse::<f64>().ok()? + f.get(12)?.parse::<f64>().ok()?) / 100.0)
-        })
-        .unwrap_or(0.0)
-}
-
-fn quartiles(mut v: Vec<f64>) -> [f64; 3] {
-    v.sort_by(f64::total_cmp);
-    let q = |p: f64| v[((v.len() - 1) as f64 * p).round() as usize];
-    [q(0.25), q(0.5), q(0.75)]
-}
-
-fn load() -> String {
-    std::fs::read_to_string("/proc/loadavg")
-        .map(|s| s.split_whitespace().take(3).collect::<Vec<_>>().join(" "))
-        .unwrap_or_default()
-}
-
+/// The coupled scene's lattice without grains, with `collision`.
 fn plain<T: Real>(nx: usize, ny: usize, collision: Collision<T>) -> FluidLattice<T> {
-    let bc = Boundaries {
-        west: SideCondition::Pressure {
-            density: T::lit(1.001),
-        },
-        east: SideCondition::Pressure {
-            density: T::lit(1.0),
-        },
-        south: SideCondition::Wall,
-        north: SideCondition::Wall,
-    };
-    let params = FluidParams {
-        tau: T::lit(0.8),
-        force: [T::zero(); 2],
-    };
-    let mut l = FluidLattice::<T>::new(nx, ny, bc, params).expect("plain lattice");
-    l.set_streaming(coupled_scene::streaming());
+    let mut l = coupled_scene::plain_lattice::<T>(nx, ny);
     l.set_collision(collision).expect("valid rates");
     l
 }
@@ -133,7 +95,7 @@ fn main() {
             .unwrap_or(default)
     };
     let (nx, ny, block, rounds) = (num(0, 1000), num(1, 500), num(2, 10), num(3, 9));
-    let load_before = load();
+    let load_before = load_average();
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(1)
         .build()
@@ -146,6 +108,6 @@ fn main() {
         "{nx} x {ny}, {} streaming, 1 thread, {rounds} interleaved blocks of {block} steps; load average before: \
          {load_before}; after: {}",
         coupled_scene::streaming().name(),
-        load()
+        load_average()
     );
 }

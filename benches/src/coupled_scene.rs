@@ -44,14 +44,10 @@ pub fn packed_grains() -> DemWorld<f64> {
         .world
 }
 
-/// A coupled world on an `nx × ny` lattice (precision `T`) over the packing `dem`, fluid radius
-/// `fluid_radius`, solid operator Ω₁ₗ.
-pub fn coupled_world<T: Real>(
-    dem: &DemWorld<f64>,
-    nx: usize,
-    ny: usize,
-    fluid_radius: f64,
-) -> CoupledWorld<T> {
+/// The benchmark lattice without grains (BGK, τ = 0.8): a small pressure drop west → east (Zou–He), walls
+/// north and south, the streaming scheme of [`streaming`]. The coupled world's fluid, and the plain lattice the
+/// examples compare it with.
+pub fn plain_lattice<T: Real>(nx: usize, ny: usize) -> FluidLattice<T> {
     let bc = Boundaries {
         west: SideCondition::Pressure {
             density: T::lit(1.001),
@@ -68,6 +64,18 @@ pub fn coupled_world<T: Real>(
     };
     let mut fluid = FluidLattice::<T>::new(nx, ny, bc, params).expect("benchmark lattice");
     fluid.set_streaming(streaming());
+    fluid
+}
+
+/// A coupled world on an `nx × ny` lattice (precision `T`) over the packing `dem`, fluid radius
+/// `fluid_radius`, solid operator Ω₁ₗ.
+pub fn coupled_world<T: Real>(
+    dem: &DemWorld<f64>,
+    nx: usize,
+    ny: usize,
+    fluid_radius: f64,
+) -> CoupledWorld<T> {
+    let mut fluid = plain_lattice::<T>(nx, ny);
     fluid.set_solid_operator(SolidOperator::LinearizedNonEquilibriumBounceBack);
     // Lattice nodes span the box: node (0, 0) at (0, 0), node (nx − 1, ny − 1) at (W, H) (h from the width).
     let map = LatticeMap {
