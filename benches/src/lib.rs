@@ -42,18 +42,25 @@ mod tests {
         assert_eq!(quartiles(vec![4.0]), [4.0; 3]);
     }
 
+    /// Busy work until the counter advances (a 10 ms tick), capped at 30 s of wall time so a counter that
+    /// never moves fails instead of hanging; independent of the machine's load.
     #[test]
     fn cpu_time_grows_with_work() {
+        if !std::path::Path::new("/proc/self/stat").exists() {
+            return;
+        }
         let before = cpu_seconds();
-        // About 0.1–0.5 s of arithmetic: more than the 10 ms tick, so the count must advance.
-        let mut x = 0.0f64;
         let start = std::time::Instant::now();
-        while start.elapsed().as_secs_f64() < 0.2 {
-            x = std::hint::black_box(x + 1.0).sqrt();
+        let mut x = 0.0f64;
+        while cpu_seconds() <= before && start.elapsed().as_secs_f64() < 30.0 {
+            for _ in 0..100_000 {
+                x = std::hint::black_box(x + 1.0).sqrt();
+            }
         }
         assert!(x.is_finite());
-        if std::path::Path::new("/proc/self/stat").exists() {
-            assert!(cpu_seconds() > before);
-        }
+        assert!(
+            cpu_seconds() > before,
+            "process CPU time did not advance in 30 s of busy work"
+        );
     }
 }

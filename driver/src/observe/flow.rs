@@ -40,7 +40,9 @@ pub fn fluid_row_means<T: Real>(
 /// tops of the highest grains (the rows above it hold mostly free fluid). 0 when the top row is already as
 /// dense as the mean, or when the column holds no solid.
 pub fn dividing_surface_depth(solid_fraction: &[f64], nx: usize, rows: usize, spacing: f64) -> f64 {
-    if nx == 0 || rows == 0 {
+    // Only whole rows that the slice holds (a short slice is not indexed past its end).
+    let rows = rows.min(solid_fraction.len().checked_div(nx).unwrap_or(0));
+    if rows == 0 {
         return 0.0;
     }
     let row_mean = |y: usize| solid_fraction[y * nx..(y + 1) * nx].iter().sum::<f64>() / nx as f64;
@@ -101,5 +103,9 @@ mod tests {
         assert_eq!(dividing_surface_depth(&[0.5; 12], 3, 4, 0.1), 0.0);
         assert_eq!(dividing_surface_depth(&[0.0; 12], 3, 4, 0.1), 0.0);
         assert_eq!(dividing_surface_depth(&[], 0, 0, 0.1), 0.0);
+        // More rows asked than the slice holds: only its whole rows count (here the step case's answer).
+        let mut eps = vec![0.0; 4 * 35];
+        eps[..4 * 30].fill(0.55);
+        assert!((dividing_surface_depth(&eps, 4, 99, 0.02) - 0.1).abs() < 1e-14);
     }
 }
