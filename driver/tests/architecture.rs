@@ -1,7 +1,7 @@
 //! The shape of `driver/src`: no import cycle between its top-level modules, and no scene kind importing
 //! another. Read from the source text (every `crate::…` path outside comments, and `super::super` climbing out
 //! of a kind's folder), so it checks what the compiler would link, without extra tools. Run alone with
-//! `cargo test -p lbdem --test architecture`.
+//! `cargo test -p lbdem --test integration architecture::`.
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
 

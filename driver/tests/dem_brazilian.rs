@@ -10,7 +10,7 @@
 //! platens touching it below and above close at 0.02 cm/s each (the uniaxial tests' speed). The load P is the
 //! mean normal force on the two platens; the test stops when P falls below half its peak.
 //!
-//! Measured (f64, `cargo test -p lbdem --test dem_brazilian`, ≈ 10 s in all): peak P = 581.5 dyne/cm at a closure
+//! Measured (f64, `cargo test -p lbdem --test integration dem_brazilian::`, ≈ 10 s in all): peak P = 581.5 dyne/cm at a closure
 //! of 0.044 cm, σ_t = 132.2 dyne/cm²; 32 bonds broken, 28 in tension. With σ̄_c = τ̄_c = 1000: P = 1203.8,
 //! σ_t = 273.7 (×2.070). All 32 breaks lie within D/4 of the loaded diameter (a central splitting crack);
 //! 10 of them before the peak (local breakage at the platen contacts). Halving the platen speed changed the

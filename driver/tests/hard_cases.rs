@@ -1,7 +1,7 @@
 //! Stability on hard settings and clear refusals: τ → ½⁺, large density drops, Mach up to 0.3 and beyond.
 //! Every case either runs and stays finite within a stated error, or is refused with a message that names
 //! the field — never silent garbage.
-mod common;
+use crate::common;
 
 use common::{lattice_channel, run_channel};
 use lbdem::error::LbdemError;

@@ -4,7 +4,7 @@
 //! names a field or a line.
 //!
 //! The fuzzer runs `LBDEM_FUZZ_CASES` cases (default 256, a few seconds); for a long campaign:
-//! `LBDEM_FUZZ_CASES=20000 cargo test -p lbdem --test hostile fuzz -- --nocapture`.
+//! `LBDEM_FUZZ_CASES=20000 cargo test -p lbdem --test integration hostile::fuzz -- --nocapture`.
 #[path = "common/scene_text.rs"]
 mod scene_text;
 #[path = "common/tweaked_demo.rs"]

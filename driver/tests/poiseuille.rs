@@ -4,7 +4,7 @@
 //! With half-way bounce-back and BGK, the steady LB solution of the body-force-driven channel is exactly the
 //! parabola plus a uniform slip u_slip = (g/ν)(16Λ − 3)/24, Λ = (τ − ½)² (He et al. 1997; Ginzburg &
 //! d'Humières 2003). So the error is second order in 1/H and vanishes at τ* = ½ + √(3/16).
-mod common;
+use crate::common;
 
 use common::{lattice_channel, loglog_slope, run_channel};
 use lbdem::kinds::channel::ChannelSetup;

@@ -326,7 +326,7 @@ fn omega1_mass_creep_into_covered_nodes_leaves_the_drag_unchanged() {
     assert!((late.drag / early.drag - 1.0).abs() < 1e-4);
 }
 
-/// Full resolution (about 45 s in the test profile): `cargo test -p lbdem --test porous -- --ignored`.
+/// Full resolution (about 45 s in the test profile): `cargo test -p lbdem --test integration porous:: -- --ignored`.
 #[test]
 #[ignore]
 fn full_resolution_drag_for_c_0_2_to_0_6() {

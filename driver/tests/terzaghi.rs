@@ -70,7 +70,7 @@ fn independent_measurements_predict_the_consolidation_coefficient_of_a_random_pa
     assert!(top[1].abs() < 1e-2 * p.loading_efficiency);
 }
 
-/// The issue's full acceptance on the bundled scene (`cargo test -p lbdem --test terzaghi -- --ignored`, about
+/// The issue's full acceptance on the bundled scene (`cargo test -p lbdem --test integration terzaghi:: -- --ignored`, about
 /// 1 min): RMS ≤ 3 % of γσ₀ after 3 sound-crossing times, and the free fit of c within 10 % of c_v.
 /// Measured (README, *Poroelastic validation*): fit +3.5 %, but RMS 6.2 %: the undrained wave rings for
 /// ~1.5 s (≈ 18 sound-crossing times; base overshoot 0.63 against γ = 0.42 at 0.25 s) and the drained
@@ -95,7 +95,7 @@ fn terzaghi_profiles_within_three_percent_after_start_up() {
 
 /// The bundled scene with a 1 s sin² load ramp (10 % of L²/c_v), compared from the ramp's end with the
 /// ramped solution drained at the measured Gibbs dividing surface of the pack's top layer
-/// (`drained_surface = "dividing_surface"`; `cargo test -p lbdem --test terzaghi -- --ignored`, 45–80 s,
+/// (`drained_surface = "dividing_surface"`; `cargo test -p lbdem --test integration terzaghi:: -- --ignored`, 45–80 s,
 /// hence not in the default suite). Measured 2026-12-03: δ = 0.115 cm, RMS 2.89 % of γσ₀, fit −8.6 %: both
 /// criteria of issue 14 met, narrowly, for this loading; the step load (5.9 %) and the short column
 /// (δ = 0.033 cm, fit −12.6 %) do not meet them that way (README).
