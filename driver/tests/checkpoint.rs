@@ -5,8 +5,7 @@
 //!
 //! Every comparison here is exact (bytes or bit patterns): checkpoints store raw IEEE bits and the steps are
 //! deterministic, so no tolerance is needed or allowed.
-#[path = "common/tweaked_demo.rs"]
-mod tweaked_demo;
+use crate::common::tweaked_demo;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::sync::Mutex;

@@ -5,10 +5,8 @@
 //!
 //! The fuzzer runs `LBDEM_FUZZ_CASES` cases (default 256, a few seconds); for a long campaign:
 //! `LBDEM_FUZZ_CASES=20000 cargo test -p lbdem --test integration hostile::fuzz -- --nocapture`.
-#[path = "common/scene_text.rs"]
-mod scene_text;
-#[path = "common/tweaked_demo.rs"]
-mod tweaked_demo;
+use crate::common::scene_text;
+use crate::common::tweaked_demo;
 use scene_text::{scene, with, SCENES};
 use std::path::{Path, PathBuf};
 use tweaked_demo::{Tweak, Tweaked};

@@ -2,8 +2,7 @@
 //! ΩΛ, B = ε) on Couette flow under a slab, Stokes' first problem, a slab sliding on a wall at rest and a free
 //! disc, and the failures of today's operators that the table in README records (what phase 2 refuses).
 //! The whole table is printed by `cargo run --release -p lbdem --example moving_table`.
-#[path = "common/moving_cases.rs"]
-mod moving_cases;
+use crate::common::moving_cases;
 
 use lbdem_kernels::fluid::collide::{SolidOperator, Weighting};
 use moving_cases::{couette, free_disc, stokes_first_problem, touching_wall, Method};

@@ -4,8 +4,7 @@
 //! operator that is not valid for free grains is refused naming the key and the operator to use. Each refusal is
 //! reached by `check` and by `run` with the same message, before anything is written (the pattern of
 //! `hostile.rs`).
-#[path = "common/scene_text.rs"]
-mod scene_text;
+use crate::common::scene_text;
 use scene_text::{scene, with};
 
 use lbdem::app;

@@ -4,8 +4,7 @@
 //!
 //! Fast variants run here; the full l = 40 grid over every τ and c is `#[ignore]`d (and printed, with every
 //! other operator next to it, by `cargo run --release -p lbdem --example tau_table`).
-#[path = "common/psm_cases.rs"]
-mod psm_cases;
+use crate::common::psm_cases;
 
 use lbdem_kernels::fluid::collide::Weighting;
 use psm_cases::{pack_permeability, random_pack, square_array, Method, TAUS};

@@ -1,5 +1,9 @@
 //! Helpers shared by the driver's integration tests.
 #![allow(dead_code)]
+pub mod moving_cases;
+pub mod psm_cases;
+pub mod scene_text;
+pub mod tweaked_demo;
 use lbdem::engine::exec::Exec;
 use lbdem::kinds::channel::{simulate, Channel, ChannelOutcome, ChannelScene};
 use lbdem::run::Case;
