@@ -23,7 +23,9 @@ use lbdem_kernels::dem::assembly::{
     ContactModel, ContactSums, WallBody, WallContactForce, WallLoad,
 };
 use lbdem_kernels::dem::bond::{Bond, BondForce, BondLaw, ParallelBond, PointBond};
-use lbdem_kernels::dem::contact::{closest_approach, wall_contact};
+use lbdem_kernels::dem::contact::{
+    closest_approach, ellipse_sample_separates, wall_contact, ELLIPSE_SAMPLES,
+};
 use lbdem_kernels::dem::integrate::central_difference_step;
 use lbdem_kernels::dem::law::{linear_contact_force, BodyState, ContactForce};
 use lbdem_kernels::dem::shape::{Particle, Wall};
@@ -840,4 +842,34 @@ fn parallel_bond_stiffness_is_the_area_and_inertia_formula() {
     }
     .stiffness(0.1);
     assert!((kt - 3e5).abs() < 1e-9 * 3e5, "{kt}");
+}
+
+/// The cull is effective as well as sound (above): it takes the sample direction nearest to the line of centres,
+/// so two equal discs apart by more than 2r / cos(π/ELLIPSE_SAMPLES) (the worst angle between that line and the
+/// nearest of the 32 directions, 5.6°: 2.0097 r) are culled whatever the direction of the line of centres.
+/// Checked at 2.02 r, every half degree round the circle; a wrong choice of direction (e.g. the one nearest to
+/// the mirror image of the line) gives a sampled gap below zero there and is caught.
+#[test]
+fn the_separating_sample_cull_catches_separated_discs_in_every_direction() {
+    assert_eq!(
+        ELLIPSE_SAMPLES, 32,
+        "the 2.02 r margin below assumes 32 directions"
+    );
+    let r = 0.2;
+    let c = [0.3, 0.4];
+    for k in 0..720 {
+        let theta = k as f64 * std::f64::consts::PI / 360.0;
+        let d = 2.02 * r;
+        let a = Particle::disc(lbdem_kernels::math::Vector::from(c), r, 2.5);
+        let b = Particle::disc(
+            lbdem_kernels::math::Vector::from([c[0] + d * theta.cos(), c[1] + d * theta.sin()]),
+            r,
+            2.5,
+        );
+        assert!(
+            ellipse_sample_separates(&a.placed(), &b.placed()),
+            "discs 2.02 r apart at {:.1}° not culled",
+            theta.to_degrees()
+        );
+    }
 }
