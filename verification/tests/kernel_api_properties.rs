@@ -321,6 +321,31 @@ fn solid_operator_names_and_symbols_are_one_to_one() {
     assert!(SolidOperator::from_name("").is_err());
 }
 
+/// The words of earlier scene files are refused, each with a hint naming the word to write instead (the scene
+/// reader passes the message on; `driver/tests/scene_collision.rs` checks it through a scene file), and an
+/// unknown word is answered with the list of every name.
+#[test]
+fn old_solid_operator_words_are_refused_with_the_new_name() {
+    for (old, new) in [
+        ("bounce_back", "non_equilibrium_bounce_back"),
+        ("moving_wall", "moving_wall_bounce_back"),
+        ("linearized", "linearized_non_equilibrium_bounce_back"),
+        ("lambda", "lambda_consistent"),
+        ("omega_lambda", "lambda_consistent"),
+    ] {
+        let msg = SolidOperator::from_name(old).expect_err(old);
+        assert!(msg.contains(&format!("\"{new}\"")), "{old}: {msg}");
+        assert!(
+            !msg.starts_with("unknown"),
+            "{old} gets the generic answer: {msg}"
+        );
+    }
+    let msg = SolidOperator::from_name("no_such_operator").expect_err("unknown word");
+    for op in SolidOperator::ALL {
+        assert!(msg.contains(op.name()), "{} missing from: {msg}", op.name());
+    }
+}
+
 /// A random lattice for the bulk/special/gather properties: populations near equilibrium, obstacle flags,
 /// sides periodic or walls.
 struct Lattice {

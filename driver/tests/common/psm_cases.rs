@@ -144,8 +144,21 @@ fn superficial(lattice: &FluidLattice<f64>, eps: &[f64]) -> (f64, f64) {
 }
 
 /// The periodic l × l cell with one cylinder of solid fraction `c` at relaxation time `tau`, run with
-/// `method` to a relative flux change below 1e-9 per 200 steps.
+/// `method` to a relative flux change below 1e-9 per 200 steps. The cylinder's centre is the cell's centre,
+/// ((l − 1)/2, (l − 1)/2) in node coordinates.
 pub fn square_array(cell: usize, c: f64, tau: f64, method: Method) -> ArrayRun {
+    square_array_at(cell, c, tau, method, [0.0; 2])
+}
+
+/// [`square_array`] with the cylinder's centre moved by `offset` (nodes) from the cell's centre: the same
+/// periodic array placed differently on the lattice (the exact drag does not change).
+pub fn square_array_at(
+    cell: usize,
+    c: f64,
+    tau: f64,
+    method: Method,
+    offset: [f64; 2],
+) -> ArrayRun {
     let nu = (tau - 0.5) / 3.0;
     let radius = cell as f64 * (c / std::f64::consts::PI).sqrt();
     let fbar = sangani_acrivos_drag(c).expect("tabulated solid fraction");
@@ -164,7 +177,7 @@ pub fn square_array(cell: usize, c: f64, tau: f64, method: Method) -> ArrayRun {
     let mid = 0.5 * (cell as f64 - 1.0);
     lattice.cover_with_discs(
         &[FluidDisc {
-            center: [mid, mid],
+            center: [mid + offset[0], mid + offset[1]],
             radius,
             velocity: [0.0; 2],
             spin: 0.0,
