@@ -748,6 +748,16 @@ fn bonded_critical_step_adds_the_bond_stiffness() {
         m.bonded_critical_time_step(&ps, &[bond], 6.0, &mut kt[..2], &mut kr),
         Err(AssemblyError::BufferLength)
     );
+    // Either scratch too short is refused; scratch longer than the particles is accepted, with the same step.
+    assert_eq!(
+        m.bonded_critical_time_step(&ps, &[bond], 6.0, &mut kt, &mut kr[..2]),
+        Err(AssemblyError::BufferLength)
+    );
+    let (mut kt_long, mut kr_long) = ([0.0; 5], [0.0; 5]);
+    assert_eq!(
+        m.bonded_critical_time_step(&ps, &[bond], 6.0, &mut kt_long, &mut kr_long),
+        Ok(bonded)
+    );
     let far = Bond {
         pair: [0, 3],
         law: bond.law,
