@@ -12,8 +12,9 @@
 //! with how the cylinder falls on the lattice, for ΩΛ (TRT, τ = 0.8) and for Ω₁ + BGK at τ = 0.6 (the issue's
 //! reference row): over the cell sides l = 24 … 48 (centre at the cell's centre), and at l = 40 over five
 //! placements of the centre along the diagonal (offsets 0, ⅛, ¼, ⅜, ½ node). The exact drag is the same for
-//! every case of a column; what moves is the discretisation of the disc's edge. How κ was set: the drag is close to linear in κ
-//! over the range tried; with κ edited to two values the three l = 30 errors were fitted by least squares to
+//! every case of a column; what moves is the discretisation of the disc's edge.
+//!
+//! How κ was set: the drag is close to linear in κ over the range tried; with κ edited to two values the three l = 30 errors were fitted by least squares to
 //! zero, and the fitted κ was run again (README, "ΩΛ's friction constant κ").
 #[path = "../tests/common/psm_cases.rs"]
 mod psm_cases;
