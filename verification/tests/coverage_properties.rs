@@ -548,3 +548,76 @@ fn disc_near_tangency_regression() {
     // The circle crosses about 4 · 2r ≈ 130 cells; a scan that saw none would prove nothing.
     assert!(cells > 100, "only {cells} boundary cells");
 }
+
+/// The grid kernel's branch cut when its first candidate points are unusable: the ellipse's extreme points
+/// along its axes are put exactly on lattice lines (x = k + ½ or y = k + ½), so the kernel must take a later
+/// candidate (the bottom point, the right point, a diagonal one) for the cut of its angles. Every cell must
+/// still match the per-cell formula within two cells' roundoff (both are exact): an angle reference that is not
+/// the chosen cut's opposite puts the arc's missing 2π into the wrong cell, a change of ≈ π of a cell.
+#[test]
+fn grid_fractions_take_a_later_branch_cut_when_the_first_lies_on_a_lattice_line() {
+    // (centre, a, b, angle): the left point on x = 7.5 (cut → bottom point); the left and bottom points on
+    // lines (cut → right point); the left and right points on x = 7.5 and 13.5 and the top and bottom points on
+    // x = 10.5 (cut → a diagonal point; no crossing at a vertex); a rotated ellipse whose left point
+    // (c − a (cos θ, sin θ)) sits on x = −2.5.
+    let theta: f64 = 0.4;
+    let cases = [
+        ([10.25, 20.27], 2.75, 1.9, 0.0),
+        ([10.25, 20.4], 2.75, 1.9, 0.0),
+        ([10.5, 20.27], 3.0, 1.9, 0.0),
+        (
+            [-2.5 + 4.0 * theta.cos(), 1.13 + 4.0 * theta.sin()],
+            4.0,
+            1.5,
+            theta,
+        ),
+    ];
+    for (centre, a, b, angle) in cases {
+        let c = Vector::from(centre);
+        let sin_cos = angle.portable_sin_cos();
+        let g = ellipse_cell_grid(c, a, b).expect("a valid ellipse");
+        let n = g.cells().expect("a small block");
+        let (mut fr, mut bd) = (vec![0.0; n], vec![false; n]);
+        assert!(
+            ellipse_grid_fractions(c, a, b, sin_cos, g, &mut fr, &mut bd),
+            "{centre:?}: no crossing is near a lattice vertex, the kernel must not refuse"
+        );
+        let e = oracle::Ellipse {
+            centre,
+            a,
+            b,
+            angle,
+        };
+        let mut sum = 0.0;
+        for j in 0..g.h {
+            for i in 0..g.w {
+                let (x, y) = ((g.x0 + i as i64) as f64, (g.y0 + j as i64) as f64);
+                let want = ellipse_cell_fraction_oriented(c, a, b, sin_cos, x, y);
+                let f = fr[j * g.w + i];
+                assert!(
+                    (f - want).abs() <= 2.0 * cell_roundoff(e.a),
+                    "{centre:?}, cell ({x}, {y}): {f} vs {want}"
+                );
+                sum += f;
+            }
+        }
+        assert!((sum - PI * a * b).abs() <= 1e-9, "{centre:?}: sum {sum}");
+    }
+}
+
+/// The grid of an ellipse is refused when either axis of its centre is not finite or out of the index range,
+/// the other being fine (each bound is checked, not only one axis's pair).
+#[test]
+fn ellipse_cell_grid_refuses_a_bad_centre_on_either_axis() {
+    for bad in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY, 1e12, -1e12] {
+        assert!(
+            ellipse_cell_grid(vector(bad, 3.2), 2.0, 1.0).is_none(),
+            "x = {bad}"
+        );
+        assert!(
+            ellipse_cell_grid(vector(3.2, bad), 2.0, 1.0).is_none(),
+            "y = {bad}"
+        );
+    }
+    assert!(ellipse_cell_grid(vector(3.2, 3.2), 2.0, 1.0).is_some());
+}
