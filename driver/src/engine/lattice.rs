@@ -1224,10 +1224,11 @@ impl<T: Real> FluidLattice<T> {
     /// One step of the in-place (AA) scheme, in three phases:
     /// 1. in parallel, read only: the new values of the special nodes (and of the covered ones among them, with
     ///    their momentum exchange), gathered from the buffer as it is;
-    /// 2. in parallel over bands of rows, in place: the covered nodes that are not special gathered from the
-    ///    band's rows and collided with the partially-saturated operator, the branch-free bulk pass over every
-    ///    node of the band, then the covered nodes' values stored over what the bulk pass wrote for them (a node
-    ///    that is not special reads and writes only places among its band's own);
+    /// 2. in parallel over bands of rows, in place, row by row: the row's covered nodes that are not special
+    ///    gathered from the row and collided with the partially-saturated operator, the branch-free bulk pass
+    ///    over every node of the row, then the covered nodes' values stored over what the bulk pass wrote for
+    ///    them (a node that is not special reads and writes only places of its own pass row; row by row keeps
+    ///    the held values in cache);
     /// 3. in parallel over the nine planes: the values of phase 1 stored at their places.
     fn step_in_place(&mut self) {
         let shape = self.shape;
@@ -1351,36 +1352,49 @@ impl<T: Real> FluidLattice<T> {
             rows.par_chunks_mut(band_rows)
                 .zip(work.par_iter_mut())
                 .enumerate()
-                .for_each(|(b, (band, (lo, hi, ex, vals)))| {
+                .for_each(|(b, (band, (lo, hi, ex, _)))| {
                     let y0 = b * band_rows;
                     let own = |k: usize| !mask[covered[k] as usize];
-                    if let Some(psm) = &psm {
-                        let (lo, hi) = (*lo, *hi);
-                        let rows = &*band;
-                        with_simd(simd, || {
-                            collide_covered_list(
-                                psm,
-                                &offsets[lo..=hi],
-                                shares,
-                                &links[lo..hi],
-                                ex,
-                                |j| {
-                                    let k = lo + j;
-                                    own(k).then(|| {
-                                        let n = covered[k] as usize;
-                                        load_from_rows(rows, kind, y0, n % nx, n / nx)
-                                    })
-                                },
-                                |j, f| vals[j] = Some(f),
-                            )
-                        })
-                    }
-                    aa_bulk_exec(simd, band, kind, &params, &collision);
-                    for (k, v) in (*lo..*hi).zip(vals.iter()).filter(|(k, _)| own(*k)) {
-                        if let Some(f) = v {
-                            let n = covered[k] as usize;
-                            store_in_rows(band, kind, y0, n % nx, n / nx, f);
+                    let (lo, hi) = (*lo, *hi);
+                    let first = offsets[lo] as usize;
+                    // Row by row, so that a row's covered values stay in cache between their collision and
+                    // their store: the row's covered nodes collided from the row as it is, the bulk pass over
+                    // the row, then the covered values stored over what the bulk pass wrote for them.
+                    let mut held: Vec<(usize, [T; Q])> = Vec::new();
+                    let mut k0 = lo;
+                    for r in 0..band.len() {
+                        let y = y0 + r;
+                        let row_end = ((y + 1) * nx) as u32;
+                        let k1 = k0 + covered[k0..hi].partition_point(|&n| n < row_end);
+                        held.clear();
+                        if let Some(psm) = &psm {
+                            if k1 > k0 {
+                                let rows = &*band;
+                                let ex = &mut ex[offsets[k0] as usize - first..];
+                                with_simd(simd, || {
+                                    collide_covered_list(
+                                        psm,
+                                        &offsets[k0..=k1],
+                                        shares,
+                                        &links[k0..k1],
+                                        ex,
+                                        |j| {
+                                            let k = k0 + j;
+                                            own(k).then(|| {
+                                                let n = covered[k] as usize;
+                                                load_from_rows(rows, kind, y0, n % nx, y)
+                                            })
+                                        },
+                                        |j, f| held.push((covered[k0 + j] as usize % nx, f)),
+                                    )
+                                })
+                            }
                         }
+                        aa_bulk_exec(simd, &mut band[r..r + 1], kind, &params, &collision);
+                        for (x, f) in &held {
+                            store_in_rows(band, kind, y0, *x, y, f);
+                        }
+                        k0 = k1;
                     }
                 });
         }
