@@ -101,6 +101,9 @@ pub struct FluidLattice<T: Real> {
     /// In-place scheme: new values of the special and covered nodes, computed before the bulk pass.
     aa_special: Vec<[T; Q]>,
     aa_covered: Vec<Option<[T; Q]>>,
+    /// In-place scheme: the covered nodes that are special (indices into the covered list), those of
+    /// `aa_covered`.
+    aa_covered_special: Vec<usize>,
 }
 
 /// Buffers kept between calls of [`FluidLattice::cover_with_bodies`]: the cells of each body, and per-node
@@ -401,8 +404,8 @@ const COVER_BAND_ROWS: usize = 16;
 const SPECIAL_CHUNK: usize = 1024;
 
 /// The covered nodes of one band of rows in the in-place step: index range in the covered list, their exchange
-/// entries, their new values.
-type CoveredBand<'a, T> = (usize, usize, &'a mut [[T; 2]], &'a mut [Option<[T; Q]>]);
+/// entries.
+type CoveredBand<'a, T> = (usize, usize, &'a mut [[T; 2]]);
 
 /// Nodes covered by solids (compressed rows), the solid each share belongs to, and the momentum handed to
 /// each share at the last step.
@@ -536,6 +539,7 @@ impl<T: Real> FluidLattice<T> {
             layout: Layout::Collided,
             aa_special: Vec::new(),
             aa_covered: Vec::new(),
+            aa_covered_special: Vec::new(),
         };
         lattice.reclassify();
         lattice.fill_equilibrium(|_, _| (T::one(), [T::zero(); 2]));
@@ -1222,8 +1226,9 @@ impl<T: Real> FluidLattice<T> {
     }
 
     /// One step of the in-place (AA) scheme, in three phases:
-    /// 1. in parallel, read only: the new values of the special nodes (and of the covered ones among them, with
-    ///    their momentum exchange), gathered from the buffer as it is;
+    /// 1. read only: the new values of the special nodes (in parallel), then of the covered ones among them with
+    ///    their momentum exchange (found by looking each special node up in the covered list), gathered from the
+    ///    buffer as it is;
     /// 2. in parallel over bands of rows, in place, row by row: the row's covered nodes that are not special
     ///    gathered from the row and collided with the partially-saturated operator, the branch-free bulk pass
     ///    over every node of the row, then the covered nodes' values stored over what the bulk pass wrote for
@@ -1273,27 +1278,20 @@ impl<T: Real> FluidLattice<T> {
             ),
             None => (&[], &[0], &[], &[], &mut [][..]),
         };
-        // Every entry is rewritten below (phase 1 for the special covered nodes, phase 2 for the others).
-        covered_vals.resize(covered.len(), None);
-        // The covered nodes, their values and their exchange entries, split along the bands of rows.
-        let bands = shape.ny.div_ceil(band_rows);
-        let mut work: Vec<CoveredBand<'_, T>> = Vec::with_capacity(bands);
-        {
-            let (mut ex_rest, mut vals_rest) = (exchange, &mut covered_vals[..]);
-            let mut lo = 0;
-            for b in 0..bands {
-                let end = (((b + 1) * band_rows).min(shape.ny) * nx) as u32;
-                let hi = lo + covered[lo..].partition_point(|&n| n < end);
-                let len = (offsets[hi] - offsets[lo]) as usize;
-                let (ex, rest) = std::mem::take(&mut ex_rest).split_at_mut(len);
-                ex_rest = rest;
-                let (vals, rest) = std::mem::take(&mut vals_rest).split_at_mut(hi - lo);
-                vals_rest = rest;
-                work.push((lo, hi, ex, vals));
-                lo = hi;
-            }
+        // The covered nodes that are special, as indices into the covered list, increasing: each special node
+        // looked up in the covered list (both are in increasing node order), so the cost is that of the special
+        // nodes, not of a scan of every covered node.
+        let mut covered_special = std::mem::take(&mut self.aa_covered_special);
+        covered_special.clear();
+        if !covered.is_empty() {
+            covered_special.extend(
+                self.special
+                    .iter()
+                    .filter_map(|n| covered.binary_search(n).ok()),
+            );
         }
-        // Phase 1.
+        // Phase 1: the special nodes, then the covered ones among them with their exchange (a few per
+        // thousand of the covered nodes: serial).
         {
             let buf = &self.buffers[range.clone()];
             special_vals.resize(self.special.len(), [T::zero(); Q]);
@@ -1307,29 +1305,40 @@ impl<T: Real> FluidLattice<T> {
                         );
                     }
                 });
+            covered_vals.clear();
             if let Some(psm) = &psm {
-                work.par_iter_mut().for_each(|(lo, hi, ex, vals)| {
-                    let first = offsets[*lo] as usize;
-                    with_simd(simd, || {
-                        for (k, v) in (*lo..*hi).zip(vals.iter_mut()) {
-                            let n = covered[k] as usize;
-                            if mask[n] {
-                                let (a, b) = (offsets[k] as usize, offsets[k + 1] as usize);
-                                let ex = &mut ex[a - first..b - first];
-                                *v = covered_node_value(
-                                    &domain,
-                                    buf,
-                                    layout,
-                                    psm,
-                                    n,
-                                    &shares[a..b],
-                                    links[k],
-                                    ex,
-                                );
-                            }
-                        }
-                    })
+                let exchange = &mut *exchange;
+                with_simd(simd, || {
+                    for &k in covered_special.iter() {
+                        let (a, b) = (offsets[k] as usize, offsets[k + 1] as usize);
+                        covered_vals.push(covered_node_value(
+                            &domain,
+                            buf,
+                            layout,
+                            psm,
+                            covered[k] as usize,
+                            &shares[a..b],
+                            links[k],
+                            &mut exchange[a..b],
+                        ));
+                    }
                 });
+            }
+        }
+        // The covered nodes and their exchange entries, split along the bands of rows.
+        let bands = shape.ny.div_ceil(band_rows);
+        let mut work: Vec<CoveredBand<'_, T>> = Vec::with_capacity(bands);
+        {
+            let mut ex_rest = exchange;
+            let mut lo = 0;
+            for b in 0..bands {
+                let end = (((b + 1) * band_rows).min(shape.ny) * nx) as u32;
+                let hi = lo + covered[lo..].partition_point(|&n| n < end);
+                let len = (offsets[hi] - offsets[lo]) as usize;
+                let (ex, rest) = std::mem::take(&mut ex_rest).split_at_mut(len);
+                ex_rest = rest;
+                work.push((lo, hi, ex));
+                lo = hi;
             }
         }
         // Phase 2: row y of the pass needs row `plane_row(kind, p, y)` of each plane p; every plane row is
@@ -1352,7 +1361,7 @@ impl<T: Real> FluidLattice<T> {
             rows.par_chunks_mut(band_rows)
                 .zip(work.par_iter_mut())
                 .enumerate()
-                .for_each(|(b, (band, (lo, hi, ex, _)))| {
+                .for_each(|(b, (band, (lo, hi, ex)))| {
                     let y0 = b * band_rows;
                     let own = |k: usize| !mask[covered[k] as usize];
                     let (lo, hi) = (*lo, *hi);
@@ -1360,7 +1369,8 @@ impl<T: Real> FluidLattice<T> {
                     // Row by row, so that a row's covered values stay in cache between their collision and
                     // their store: the row's covered nodes collided from the row as it is, the bulk pass over
                     // the row, then the covered values stored over what the bulk pass wrote for them.
-                    let mut held: Vec<(usize, [T; Q])> = Vec::new();
+                    // At most one row's worth of nodes: one allocation per band per step.
+                    let mut held: Vec<(usize, [T; Q])> = Vec::with_capacity(nx);
                     let mut k0 = lo;
                     for r in 0..band.len() {
                         let y = y0 + r;
@@ -1403,12 +1413,9 @@ impl<T: Real> FluidLattice<T> {
         // scheme).
         {
             let flags = &self.flags[..];
-            let covered_special: Vec<usize> = (0..covered.len())
-                .into_par_iter()
-                .filter(|&k| mask[covered[k] as usize] && covered_vals[k].is_some())
-                .collect();
             let buf = &mut self.buffers[range];
             let (special, sv, cv) = (&self.special[..], &special_vals, &covered_vals);
+            let cs = &covered_special;
             planes_mut(&shape, buf)
                 .into_par_iter()
                 .enumerate()
@@ -1422,8 +1429,8 @@ impl<T: Real> FluidLattice<T> {
                     for (&n, f) in special.iter().zip(sv) {
                         store(plane, n, f);
                     }
-                    for &k in &covered_special {
-                        if let Some(f) = &cv[k] {
+                    for (&k, f) in cs.iter().zip(cv) {
+                        if let Some(f) = f {
                             store(plane, covered[k], f);
                         }
                     }
@@ -1432,6 +1439,7 @@ impl<T: Real> FluidLattice<T> {
         self.layout = after;
         self.aa_special = special_vals;
         self.aa_covered = covered_vals;
+        self.aa_covered_special = covered_special;
     }
 
     /// One step of the two-lattice scheme: bulk pass, special nodes and covered nodes per band of rows, from the
