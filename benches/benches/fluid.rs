@@ -10,7 +10,7 @@
 //! * `trt`, `psm-trt`: the `bgk` and `psm` cases with the two-relaxation-time collision (Λ = 3/16), same
 //!   sizes, run in the same process right after their BGK twins; `psm-lambda`: the `psm` case with TRT and the
 //!   τ-independent solid operator ΩΛ (B = ε). The table ends with the time of a TRT node over a BGK node for
-//!   every pair measured (issue 11 target: ≤ 1.15).
+//!   every pair measured (target: ≤ 1.15).
 //!
 //! Both streaming schemes read 9 and write 9 populations per node update: 144 bytes per update in f64, 72 in
 //! f32, counted as STREAM counts (no write-allocate), so the MLUPS ceiling is bandwidth / 144 B (f64) or / 72 B

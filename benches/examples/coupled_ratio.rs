@@ -1,4 +1,4 @@
-//! The coupled step against the plain BGK step at the same size, in one run (issue 13's ratio target:
+//! The coupled step against the plain BGK step at the same size, in one run (ratio target:
 //! coupled ≥ 0.35× BGK). Two lattices of the coupled bench's size (default 1000 × 500, the fracture test's order
 //! of magnitude): the coupled world of `benches/coupled.rs` (~1000 bonded ellipse grains, Ω₁ₗ, fluid radius 0.7,
 //! pressure drop west → east, walls north and south) and a plain BGK lattice with the same sides, τ, precision and

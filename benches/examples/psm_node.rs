@@ -1,4 +1,4 @@
-//! The cost of a covered (partially-saturated) node in units of a plain fluid node (issue 13's target: a covered
+//! The cost of a covered (partially-saturated) node in units of a plain fluid node (target: a covered
 //! node ≤ 3× a BGK node). The coupled bench's grains (`benches/src/coupled_scene.rs`, ~1000 bonded ellipses,
 //! fluid radius 0.7) are mapped once onto an `nx × ny` lattice, which then steps with the coverage frozen (the
 //! fluid step alone: no re-mapping, no DEM), interleaved block by block with a lattice without grains (same

@@ -1,4 +1,4 @@
-//! The moving-solid table of issue 11 item 4: every solid operator (Ω₁, Ω₂, Ω₃, Ω₁ₗ with BGK and NT's weighting;
+//! The moving-solid table: every solid operator (Ω₁, Ω₂, Ω₃, Ω₁ₗ with BGK and NT's weighting;
 //! ΩΛ with TRT, Λ = 3/16, B = ε) on four cases at τ ∈ {0.55, 0.8, 1.2, 2.0}:
 //!
 //! * Couette under a slab whose surface lies on a cell face: effective surface minus geometric (nodes);

@@ -1,4 +1,4 @@
-//! Where the piston force of `kind = "fluid_compressibility"` comes from (issue 14 item 4): the scene's piston
+//! Where the piston force of `kind = "fluid_compressibility"` comes from: the scene's piston
 //! (a flat ellipse 2b nodes thick spanning a walled box) moved west by one spacing and stopped, for a chosen
 //! solid operator and fluid collision, with the momentum exchange taken apart node by node.
 //!

@@ -1,4 +1,4 @@
-//! The τ table of issue 11: drag of the periodic square array of cylinders against Sangani & Acrivos (1982)
+//! The τ table: drag of the periodic square array of cylinders against Sangani & Acrivos (1982)
 //! for τ ∈ {0.55, 0.6, 0.8, 1.2, 2.0} and c ∈ {0.2, 0.4, 0.6}, for every solid operator with BGK and with TRT
 //! (Λ = 3/16) side by side, and the τ-independent method (TRT + ΩΛ) with both weightings.
 //!

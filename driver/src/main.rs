@@ -147,7 +147,15 @@ fn main() -> ExitCode {
         Command::Study {
             study: StudyCommand::SpeedVsError { out, quick, exec },
         } => exec.exec().and_then(|exec| {
-            lbdem::study::speed_vs_error(&out, quick, true, &exec).map(|md| print!("{md}"))
+            let plan = if quick {
+                lbdem::study::StudyPlan::quick()
+            } else {
+                lbdem::study::StudyPlan::full()
+            };
+            lbdem::study::speed_vs_error(&out, &plan, &exec, |r| {
+                eprintln!("{}", lbdem::study::progress_line(r))
+            })
+            .map(|md| print!("{md}"))
         }),
     };
     match result {

@@ -9,7 +9,7 @@
 //!   L = H, so ny × ny nodes) but at the τ = 0.875 of table 4.1 rather than the "magic" τ = ½ + √(3/16), where half-way
 //!   bounce-back is exact, so that the error shows the method's second-order convergence; same error measure.
 //! * `cylinder_array`: the periodic square array of discs at solid fraction c = 0.4, cell side `l` nodes;
-//!   error = |F/(μU) / Sangani–Acrivos − 1|. With the τ axis (issue 11): every resolution is run with each
+//!   error = |F/(μU) / Sangani–Acrivos − 1|. With a τ axis: every resolution is run with each
 //!   [`ArrayMethod`] — the dissertation's Ω₁ with BGK and the τ-independent ΩΛ with TRT (Λ = 3/16) — at each τ
 //!   of [`StudyPlan::array_variants`] ([`ArrayCase::stokes`], drive for U = 1e-3 whatever τ). A larger τ is a larger
 //!   viscosity in lattice units: the flow settles in fewer steps (∝ 1/ν), which is cheaper, and with ΩΛ costs no
@@ -672,39 +672,46 @@ pub fn plot(rows: &[StudyRow], path: &Path) -> Result<()> {
     )
 }
 
-/// Run the study and write `speed_vs_error.csv`, `speed_vs_error.png` and `speed_vs_error.md` into `out`.
-/// Returns the markdown report (table, recommendations, f32 notes).
-pub fn speed_vs_error(out: &Path, quick: bool, verbose: bool, exec: &Exec) -> Result<String> {
-    exec.install(|| speed_vs_error_in_pool(out, quick, verbose, exec))?
+/// Run the study of `plan` and write `speed_vs_error.csv`, `speed_vs_error.png` and `speed_vs_error.md` into
+/// `out`; `progress` sees each finished run (see [`progress_line`]). Returns the markdown report (table,
+/// recommendations, f32 notes).
+pub fn speed_vs_error(
+    out: &Path,
+    plan: &StudyPlan,
+    exec: &Exec,
+    progress: impl FnMut(&StudyRow) + Send,
+) -> Result<String> {
+    exec.install(|| speed_vs_error_in_pool(out, plan, exec, progress))?
 }
 
-fn speed_vs_error_in_pool(out: &Path, quick: bool, verbose: bool, exec: &Exec) -> Result<String> {
+/// One line of progress for a finished run: problem, precision, resolution, τ, method, steps, time, MLUPS, error.
+pub fn progress_line(r: &StudyRow) -> String {
+    format!(
+        "  {:<22} {} {:>3} τ {:<4} {:<10}: {:>8} steps {:>8.3} s {:>7.1} MLUPS  error {:.3e}",
+        r.problem.name(),
+        r.precision,
+        r.resolution,
+        r.tau,
+        r.method,
+        r.steps,
+        r.wall_seconds,
+        r.mlups,
+        r.relative_error
+    )
+}
+
+fn speed_vs_error_in_pool(
+    out: &Path,
+    plan: &StudyPlan,
+    exec: &Exec,
+    progress: impl FnMut(&StudyRow),
+) -> Result<String> {
     std::fs::create_dir_all(out).map_err(|e| LbdemError::Write {
         path: out.display().to_string(),
         source: e,
     })?;
-    let plan = if quick {
-        StudyPlan::quick()
-    } else {
-        StudyPlan::full()
-    };
     let start = Instant::now();
-    let rows = run_study(&plan, exec, |r| {
-        if verbose {
-            eprintln!(
-                "  {:<22} {} {:>3} τ {:<4} {:<10}: {:>8} steps {:>8.3} s {:>7.1} MLUPS  error {:.3e}",
-                r.problem.name(),
-                r.precision,
-                r.resolution,
-                r.tau,
-                r.method,
-                r.steps,
-                r.wall_seconds,
-                r.mlups,
-                r.relative_error
-            );
-        }
-    })?;
+    let rows = run_study(plan, exec, progress)?;
     write_atomic(&out.join("speed_vs_error.csv"), csv(&rows).as_bytes())?;
     plot(&rows, &out.join("speed_vs_error.png"))?;
     let mut md = String::new();

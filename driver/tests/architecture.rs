@@ -1,5 +1,5 @@
-//! The shape of `driver/src`: no import cycle between its top-level modules, and no scene kind importing
-//! another. Read from the source text (every `crate::…` path outside comments, and `super::super` climbing out
+//! The shape of `driver/src`: no import cycle between its top-level modules, nor between the sibling modules
+//! of any folder (`engine::exec` ↔ `engine::lattice` would be one), and no scene kind importing another. Read from the source text (every `crate::…` path outside comments, and `super::super` climbing out
 //! of a kind's folder), so it checks what the compiler would link, without extra tools. Run alone with
 //! `cargo test -p lbdem --test integration architecture::`.
 use std::collections::{BTreeMap, BTreeSet};
@@ -134,6 +134,205 @@ fn top_level_modules_form_no_import_cycle() {
         );
     }
     eprintln!("driver/src layers, lowest first: {order:?}");
+}
+
+/// The module path of a file of the library (`["engine", "lattice"]` for `src/engine/lattice.rs` and for
+/// `src/engine/lattice/mod.rs`); `None` for the binary's files (`main.rs`), which form another crate.
+fn module_path(path: &Path) -> Option<Vec<String>> {
+    let rel = path.strip_prefix(src()).unwrap();
+    let mut parts: Vec<String> = rel
+        .components()
+        .map(|c| c.as_os_str().to_string_lossy().into_owned())
+        .collect();
+    let last = parts.pop()?;
+    let stem = last.trim_end_matches(".rs");
+    match stem {
+        "main" if parts.is_empty() => return None,
+        "lib" if parts.is_empty() => {}
+        "mod" => {}
+        _ => parts.push(stem.to_string()),
+    }
+    Some(parts)
+}
+
+/// The paths of one `use` tree or path expression starting at `s[*i]` (after `crate::`, `super::` or `self::`),
+/// each as its segments, appended to `prefix`: `{exec::{a, b}, lattice::C as D}` gives `exec::a`, `exec::b`,
+/// `lattice::C`.
+fn use_tree(s: &[u8], i: &mut usize, prefix: Vec<String>, out: &mut Vec<Vec<String>>) {
+    let mut prefix = prefix;
+    loop {
+        while *i < s.len() && s[*i].is_ascii_whitespace() {
+            *i += 1;
+        }
+        if *i < s.len() && s[*i] == b'{' {
+            *i += 1;
+            loop {
+                while *i < s.len() && (s[*i].is_ascii_whitespace() || s[*i] == b',') {
+                    *i += 1;
+                }
+                if *i >= s.len() || s[*i] == b'}' {
+                    *i += 1;
+                    return;
+                }
+                use_tree(s, i, prefix.clone(), out);
+                // Skip a renaming (`as D`) up to the next item.
+                while *i < s.len() && s[*i] != b',' && s[*i] != b'}' && s[*i] != b'{' {
+                    *i += 1;
+                }
+            }
+        }
+        let start = *i;
+        while *i < s.len() && (s[*i].is_ascii_alphanumeric() || s[*i] == b'_' || s[*i] == b'*') {
+            *i += 1;
+        }
+        if *i > start {
+            prefix.push(String::from_utf8_lossy(&s[start..*i]).into_owned());
+        }
+        if *i > start && s[*i..].starts_with(b"::") {
+            *i += 2;
+            continue;
+        }
+        out.push(prefix);
+        return;
+    }
+}
+
+/// Every module path the code of the file at module path `here` refers to through `crate::`, `super::` or
+/// `self::` (resolved to absolute paths). The file's test module (from `#[cfg(test)]` on) is left out: its
+/// `super::` means the file itself.
+fn refs(code: &str, here: &[String]) -> Vec<Vec<String>> {
+    let code = match code.find("#[cfg(test)]\nmod ") {
+        Some(k) => &code[..k],
+        None => code,
+    };
+    let s = code.as_bytes();
+    let mut out = Vec::new();
+    let mut i = 0;
+    while i < s.len() {
+        let boundary =
+            i == 0 || !(s[i - 1].is_ascii_alphanumeric() || s[i - 1] == b'_' || s[i - 1] == b':');
+        let head = ["crate::", "super::", "self::"]
+            .into_iter()
+            .find(|h| s[i..].starts_with(h.as_bytes()));
+        match head {
+            Some(_) if boundary => {
+                let mut paths = Vec::new();
+                use_tree(s, &mut i, Vec::new(), &mut paths);
+                for p in paths {
+                    let mut base: Vec<String> = here.to_vec();
+                    let mut k = 0;
+                    match p.first().map(String::as_str) {
+                        Some("crate") => {
+                            base.clear();
+                            k = 1;
+                        }
+                        Some("self") => k = 1,
+                        _ => {
+                            while p.get(k).is_some_and(|x| x == "super") {
+                                base.pop();
+                                k += 1;
+                            }
+                        }
+                    }
+                    base.extend(p[k..].iter().cloned());
+                    out.push(base);
+                }
+            }
+            _ => i += 1,
+        }
+    }
+    out
+}
+
+#[test]
+fn sibling_modules_form_no_import_cycle_at_any_depth() {
+    let mut files = Vec::new();
+    rust_files(&src(), &mut files);
+    let files: Vec<(Vec<String>, String)> = files
+        .iter()
+        .filter_map(|f| Some((module_path(f)?, code(f))))
+        .collect();
+    // Every module that has children: its children are the siblings checked against each other.
+    let parents: BTreeSet<Vec<String>> = files
+        .iter()
+        .filter(|(m, _)| !m.is_empty())
+        .map(|(m, _)| m[..m.len() - 1].to_vec())
+        .collect();
+    let mut checked = 0;
+    for parent in &parents {
+        let depth = parent.len();
+        let children: BTreeSet<String> = files
+            .iter()
+            .filter(|(m, _)| m.len() > depth && m.starts_with(parent))
+            .map(|(m, _)| m[depth].clone())
+            .collect();
+        let mut g: BTreeMap<String, BTreeSet<String>> = BTreeMap::new();
+        for (m, code) in files
+            .iter()
+            .filter(|(m, _)| m.len() > depth && m.starts_with(parent))
+        {
+            let from = &m[depth];
+            let e = g.entry(from.clone()).or_default();
+            for r in refs(code, m) {
+                if r.len() > depth
+                    && r.starts_with(parent)
+                    && r[depth] != *from
+                    && children.contains(&r[depth])
+                {
+                    e.insert(r[depth].clone());
+                }
+            }
+        }
+        // Kahn's algorithm, as for the top level.
+        let mut left = g.clone();
+        while !left.is_empty() {
+            let ready: Vec<String> = left
+                .iter()
+                .filter(|(_, d)| d.is_empty())
+                .map(|(m, _)| m.clone())
+                .collect();
+            assert!(
+                !ready.is_empty(),
+                "import cycle among the modules of `crate::{}`: {left:?}",
+                parent.join("::")
+            );
+            for m in &ready {
+                left.remove(m);
+            }
+            for d in left.values_mut() {
+                for m in &ready {
+                    d.remove(m);
+                }
+            }
+        }
+        checked += 1;
+    }
+    // The library root, engine, engine::dem, kinds, every kind with sub-files, …: a test that read no folder
+    // would pass vacuously.
+    assert!(
+        checked >= 8,
+        "only {checked} module folders read: {parents:?}"
+    );
+}
+
+#[test]
+fn the_path_reader_sees_grouped_and_relative_imports() {
+    let here: Vec<String> = vec!["engine".into(), "dem".into(), "loading".into()];
+    let code = "use super::{packing::Packing, staged::{A, B as C}};\nuse crate::engine::exec::X;\n\
+                let _ = super::super::lattice::Streaming::Aa; pub(super) fn f() {}";
+    let got: BTreeSet<String> = refs(code, &here)
+        .into_iter()
+        .map(|p| p.join("::"))
+        .collect();
+    for want in [
+        "engine::dem::packing::Packing",
+        "engine::dem::staged::A",
+        "engine::dem::staged::B",
+        "engine::exec::X",
+        "engine::lattice::Streaming::Aa",
+    ] {
+        assert!(got.contains(want), "{want} not in {got:?}");
+    }
 }
 
 #[test]

@@ -1,4 +1,4 @@
-//! Boundaries of issue 11 item 5 through `FluidLattice`: a wall sliding along itself (half-way bounce-back with
+//! Boundaries through `FluidLattice`: a wall sliding along itself (half-way bounce-back with
 //! Ladd's correction) against Couette flow, a Zou–He velocity side with a per-node profile against an imposed
 //! parabola, the pressure–pressure channel at high τ (BGK's Λ-dependent error bounded, gone with TRT), bad
 //! profiles refused, and the new sides bitwise identical across streaming schemes, SIMD levels and threads.

@@ -20,6 +20,7 @@ use lbdem::kinds::coupled_demo::{CoupledDemo, DemoScene, DemoState};
 use lbdem::run::checkpoint::{Checkpoint, Persist, CHECKPOINT_FILE, DIVERGED_FILE, SCENE_COPY};
 use lbdem::run::{Case, CheckpointInterval, Stop};
 use lbdem_kernels::dem::assembly::ContactModel;
+use lbdem_kernels::dem::servo::ServoLaw;
 use lbdem_kernels::fluid::boundary::{Boundaries, SideCondition};
 use lbdem_kernels::fluid::collide::{SolidOperator, Weighting};
 use lbdem_kernels::fluid::step::FluidParams;
@@ -167,11 +168,11 @@ fn bonded_world() -> DemWorld<f64> {
     // Squeeze fast from top and bottom, servo the sides: contacts, bond breaks, moving platens.
     p.world.platens[b.top].control = PlatenControl::Speed(2.0);
     p.world.platens[b.bottom].control = PlatenControl::Speed(2.0);
-    let servo = PlatenControl::Servo {
+    let servo = PlatenControl::Servo(ServoLaw {
         target_stress: 50.0,
         relaxation: 0.5,
         max_speed: 1.0,
-    };
+    });
     p.world.platens[b.left].control = servo;
     p.world.platens[b.right].control = servo;
     p.world.gravity = lbdem_kernels::math::vector(0.0, -981.0);

@@ -1,4 +1,4 @@
-//! Validation of the dry bonded-particle model orchestrated by `lbdem::solid` (issue 3): scaling of the
+//! Validation of the dry bonded-particle model orchestrated by `lbdem::engine::dem`: scaling of the
 //! elastic modulus with the contact/bond stiffness, of the uniaxial strength with the bond strength, and the
 //! rise of the failure-envelope slope with friction (docs/references.md §7.4, dissertation ch. 2); determinism; the
 //! critical-step refusal.
@@ -26,6 +26,7 @@ use std::sync::OnceLock;
 use lbdem::engine::dem::*;
 use lbdem_kernels::dem::assembly::ContactModel;
 use lbdem_kernels::dem::bond::BreakMode;
+use lbdem_kernels::dem::servo::ServoLaw;
 
 const BOND_STIFFNESS: f64 = 2.8e5;
 const BOND_STRENGTH: f64 = 500.0;
@@ -212,11 +213,11 @@ fn step_is_bitwise_identical_for_one_and_two_threads() {
             let mut p = bonded_hexagonal_block(30);
             let b = p.sample_box;
             p.world.platens[b.top].control = PlatenControl::Speed(0.5);
-            p.world.platens[b.left].control = PlatenControl::Servo {
+            p.world.platens[b.left].control = PlatenControl::Servo(ServoLaw {
                 target_stress: 10.0,
                 relaxation: 0.5,
                 max_speed: 0.1,
-            };
+            });
             for _ in 0..300 {
                 p.world.step();
             }
@@ -284,11 +285,11 @@ fn boundary_particle_stress_and_servo_platens_hold_their_targets() {
     let height = w.platens[b.top].wall.point[1] - w.platens[b.bottom].wall.point[1];
     for side in [b.left, b.right] {
         w.platens[side].length = height;
-        w.platens[side].control = PlatenControl::Servo {
+        w.platens[side].control = PlatenControl::Servo(ServoLaw {
             target_stress: 20.0,
             relaxation: 0.5,
             max_speed: 0.05,
-        };
+        });
     }
     let top = w.boundary_particles(3, 0.05);
     assert!(top.len() >= 12 && top.len() <= 20, "{}", top.len());

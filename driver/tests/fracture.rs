@@ -410,6 +410,48 @@ fn an_interrupted_run_resumes_bitwise_identically() {
     same_files(&whole, &cut);
 }
 
+/// The first chunk of a fracture run measures the intact sample's permeability and diffusivity (up to 4·10⁵
+/// fluid steps at full size) before the loads drop. A stop request (Ctrl-C, SIGTERM) raised during it abandons
+/// the measurements and leaves the state exactly as it was, so the run loop checkpoints at once and a resume
+/// redoes them; without the request the same chunk measures and drops the loads.
+#[test]
+fn a_stop_request_cuts_the_intact_sample_measurements_short_with_the_state_untouched() {
+    use lbdem::engine::exec::Exec;
+    use lbdem::run::{Checkpoint, Kind, Stop};
+    let text = std::fs::read_to_string(quick("base")).expect("scene file");
+    let case = Case::<FractureTest>::read(&text, "base.toml").expect("valid scene");
+    assert!(
+        case.scene.output.permeability,
+        "the quick base scene measures the intact sample (else this test checks nothing)"
+    );
+    let exec = Exec::default();
+    let mut state = start_packed(&case, &exec, packing()).expect("state");
+    let bytes = |s: &lbdem::kinds::fracture::FractureState| {
+        Checkpoint::to_bytes(&text, "fracture", FractureTest::steps_done(s), s)
+    };
+    let before = bytes(&state);
+    let stop = Stop::new();
+    stop.request();
+    FractureTest::advance_or_stop(&case, &mut state, None, &stop).expect("abandoned chunk");
+    assert!(
+        bytes(&state) == before,
+        "an abandoned chunk changed the state"
+    );
+    stop.clear();
+    FractureTest::advance_or_stop(&case, &mut state, None, &stop).expect("measured chunk");
+    assert!(
+        bytes(&state) != before,
+        "the chunk without a stop request did nothing"
+    );
+    let results = FractureTest::results(&case, &state).expect("results");
+    let k = results["permeability"]["permeability"].as_f64();
+    assert!(
+        k.is_some_and(|k| k > 0.0 && k.is_finite()),
+        "the intact-sample permeability was not measured: {}",
+        results["permeability"]
+    );
+}
+
 #[test]
 fn results_do_not_depend_on_the_thread_count() {
     let path = short_scene("threads", 0.002);

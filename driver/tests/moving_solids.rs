@@ -1,4 +1,4 @@
-//! Moving solids through the coverage machinery (issue 11 item 4): the τ-independent method (TRT, Λ = 3/16,
+//! Moving solids through the coverage machinery: the τ-independent method (TRT, Λ = 3/16,
 //! ΩΛ, B = ε) on Couette flow under a slab, Stokes' first problem, a slab sliding on a wall at rest and a free
 //! disc, and the failures of today's operators that the table in README records (what phase 2 refuses).
 //! The whole table is printed by `cargo run --release -p lbdem --example moving_table`.

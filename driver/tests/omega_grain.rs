@@ -1,5 +1,5 @@
-//! ΩΛ with free grains whose coverage leaves a node almost, but not quite, fully covered (issue 11 leftover:
-//! the `terzaghi` column of free grains diverged under ΩΛ at such a node, `examples/omega_probe.rs`).
+//! ΩΛ with free grains whose coverage leaves a node almost, but not quite, fully covered
+//! (the `terzaghi` column of free grains once diverged under ΩΛ at such a node, `examples/omega_probe.rs`).
 use lbdem::engine::coupled::{CoupledWorld, LatticeMap};
 use lbdem::engine::dem::DemWorld;
 use lbdem::engine::lattice::FluidLattice;

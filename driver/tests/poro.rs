@@ -1,4 +1,4 @@
-//! Coupled and transient validation cases (issue 4 item 3): terminal slip of a free disc, 1-D pressure diffusion
+//! Coupled and transient validation cases: terminal slip of a free disc, 1-D pressure diffusion
 //! through a slab of fixed grains. Each runs its bundled scene file.
 use std::path::Path;
 

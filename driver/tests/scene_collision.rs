@@ -1,4 +1,4 @@
-//! Issue 11, phase 2: the scene keys of the fluid collision (`[fluid] collision`, `magic`) and of the PSM solid
+//! The scene keys of the fluid collision (`[fluid] collision`, `magic`) and of the PSM solid
 //! operator (`solid_operator`, named by the literature), and their refusals: the words of earlier scene files
 //! are refused naming the new word, Λ ≤ 0 / non-finite Λ / τ⁻ ≤ ½ / `magic` with BGK name `fluid.magic`, and an
 //! operator that is not valid for free grains is refused naming the key and the operator to use. Each refusal is

@@ -1,4 +1,4 @@
-//! Terzaghi 1-D consolidation of a random pack of free grains against theory (issue 14 items 1–3): the
+//! Terzaghi 1-D consolidation of a random pack of free grains against theory: the
 //! loading efficiency and consolidation coefficient are predicted from independent measurements (dry
 //! constrained modulus, Darcy permeability, the lattice's storage porosity, the LB fluid's compressibility;
 //! `lbdem_reference::poroelastic`) and the pore-pressure profiles compared with Terzaghi's series.

@@ -1,4 +1,4 @@
-//! The two-relaxation-time (TRT) fluid through `FluidLattice` (issue 11 item 1): the same bitwise guarantees as
+//! The two-relaxation-time (TRT) fluid through `FluidLattice`: the same bitwise guarantees as
 //! BGK (every SIMD level of the bulk pass, both streaming schemes, any thread count and band height, f32 and
 //! f64), a checkpoint keeps the operator, and bad magic parameters are refused with the field named.
 use lbdem::engine::exec::SimdLevel;

@@ -1,4 +1,4 @@
-//! Acceptance of the τ-independent partially saturated method (issue 11 items 2–3): TRT (Λ = 3/16) with the
+//! Acceptance of the τ-independent partially saturated method: TRT (Λ = 3/16) with the
 //! ΩΛ solid operator and B = ε, on the periodic square array of cylinders against Sangani & Acrivos (1982)
 //! and on a random pack of 100 discs, at τ ∈ {0.55, 0.6, 0.8, 1.2, 2.0}.
 //!

@@ -213,15 +213,6 @@ pub fn slab_mean_pressure(t: f64, c: f64, half_length: f64) -> f64 {
     s
 }
 
-/// Terzaghi's one-dimensional consolidation (Terzaghi 1943; Verruijt, *Soil Mechanics*, ch. 15): the excess
-/// pore pressure of a layer of thickness H, drained at its top (depth 0) and impervious at its base (depth H),
-/// after a step load that raises it to p₀ everywhere, as p/p₀ at `depth_below_drain` and time `t` for the
-/// consolidation coefficient `c_v`. By symmetry the layer is half of the slab −H ≤ x ≤ H drained at both faces,
-/// with x = H − depth: [`slab_pressure`].
-pub fn terzaghi_pressure(depth_below_drain: f64, t: f64, c_v: f64, thickness: f64) -> f64 {
-    slab_pressure(thickness - depth_below_drain, t, c_v, thickness).0
-}
-
 #[cfg(test)]
 mod published {
     use super::*;
@@ -254,8 +245,5 @@ mod published {
         let one =
             8.0 / std::f64::consts::PI.powi(2) * (-std::f64::consts::PI.powi(2) * t / 4.0).exp();
         assert!((slab_mean_pressure(t, 1.0, 1.0) - one).abs() < 1e-12 * one.max(1e-300) + 1e-15);
-        // Terzaghi: the drained face is at 0, the impervious base (the slab's centre plane) keeps the most.
-        assert!(terzaghi_pressure(0.0, 0.2, 1.0, 1.0).abs() < 1e-12);
-        assert!(terzaghi_pressure(1.0, 0.2, 1.0, 1.0) > terzaghi_pressure(0.5, 0.2, 1.0, 1.0));
     }
 }

@@ -1,4 +1,4 @@
-//! Properties of the public kernel functions that no other property file names (issue 17: every public
+//! Properties of the public kernel functions that no other property file names (every public
 //! function of `lbdem-kernels` appears in at least one property test; the guard `every_public_kernel_function_
 //! is_named_by_a_property_test` below keeps it so). Each property checks the function against an independent
 //! formula or oracle, not against its own code:

@@ -80,6 +80,38 @@ impl SimdLevel {
     }
 }
 
+/// How populations are streamed. Both schemes give bitwise the same populations after every step; they
+/// differ in memory and speed only.
+#[derive(
+    Clone, Copy, Debug, Default, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize,
+)]
+#[serde(rename_all = "kebab-case")]
+pub enum Streaming {
+    /// In place, AA pattern: one buffer, 2/3 of the memory traffic of the two-lattice scheme.
+    #[default]
+    Aa,
+    /// Two-lattice pull: read one buffer, write the other.
+    TwoLattice,
+}
+
+impl Streaming {
+    /// Both schemes.
+    pub const ALL: [Streaming; 2] = [Streaming::Aa, Streaming::TwoLattice];
+
+    /// Name for reports and the command line: "aa", "two-lattice".
+    pub fn name(self) -> &'static str {
+        match self {
+            Streaming::Aa => "aa",
+            Streaming::TwoLattice => "two-lattice",
+        }
+    }
+
+    /// The scheme named `name`, or `None`.
+    pub fn from_name(name: &str) -> Option<Self> {
+        Self::ALL.into_iter().find(|s| s.name() == name)
+    }
+}
+
 /// How the work is executed: worker threads, the instruction set of the fluid's bulk pass, the fluid's
 /// streaming scheme. None of these changes a single bit of the results, only speed and memory. Passed down from
 /// the command line to every lattice a run creates (no process-wide settings).
@@ -90,7 +122,7 @@ pub struct Exec {
     /// Instruction set of the bulk pass.
     pub simd: SimdLevel,
     /// Streaming scheme.
-    pub streaming: crate::engine::lattice::Streaming,
+    pub streaming: Streaming,
 }
 
 impl Default for Exec {
@@ -99,7 +131,7 @@ impl Default for Exec {
         Self {
             threads: 0,
             simd: SimdLevel::detect(),
-            streaming: crate::engine::lattice::Streaming::default(),
+            streaming: Streaming::default(),
         }
     }
 }
@@ -139,29 +171,16 @@ impl Exec {
             exec.simd = level;
         }
         if let Some(name) = streaming {
-            exec.streaming =
-                crate::engine::lattice::Streaming::from_name(name).ok_or_else(|| {
-                    crate::error::LbdemError::field(
-                        "--streaming",
-                        name,
-                        "is not a known streaming scheme",
-                        "use aa or two-lattice",
-                    )
-                })?;
+            exec.streaming = Streaming::from_name(name).ok_or_else(|| {
+                crate::error::LbdemError::field(
+                    "--streaming",
+                    name,
+                    "is not a known streaming scheme",
+                    "use aa or two-lattice",
+                )
+            })?;
         }
         Ok(exec)
-    }
-
-    /// Use these settings on a lattice (instruction set and streaming scheme).
-    pub fn apply<T: lbdem_kernels::Real>(
-        &self,
-        lattice: &mut crate::engine::lattice::FluidLattice<T>,
-    ) {
-        // A level this CPU lacks cannot be constructed through `from_names`; fall back to the detected one.
-        if lattice.set_simd(self.simd).is_err() {
-            let _ = lattice.set_simd(SimdLevel::detect());
-        }
-        lattice.set_streaming(self.streaming);
     }
 
     /// Run `op` on a rayon pool with [`Exec::threads`] workers (the current pool when 0).
@@ -334,12 +353,6 @@ mod x86 {
 pub trait ExecTarget {
     /// Use `exec`'s settings.
     fn take(&mut self, exec: &Exec);
-}
-
-impl<T: lbdem_kernels::Real> ExecTarget for crate::engine::lattice::FluidLattice<T> {
-    fn take(&mut self, exec: &Exec) {
-        exec.apply(self);
-    }
 }
 
 #[cfg(test)]

@@ -31,40 +31,9 @@ use lbdem_kernels::Real;
 use rayon::prelude::*;
 use std::borrow::Cow;
 
-use crate::engine::exec::{aa_bulk_exec, bulk_band_exec, with_simd, SimdLevel};
+pub use crate::engine::exec::Streaming;
+use crate::engine::exec::{aa_bulk_exec, bulk_band_exec, with_simd, Exec, ExecTarget, SimdLevel};
 use crate::error::{LbdemError, Result};
-
-/// How populations are streamed. Both schemes give bitwise the same populations after every step; they
-/// differ in memory and speed only.
-#[derive(
-    Clone, Copy, Debug, Default, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize,
-)]
-#[serde(rename_all = "kebab-case")]
-pub enum Streaming {
-    /// In place, AA pattern: one buffer, 2/3 of the memory traffic of the two-lattice scheme.
-    #[default]
-    Aa,
-    /// Two-lattice pull: read one buffer, write the other.
-    TwoLattice,
-}
-
-impl Streaming {
-    /// Both schemes.
-    pub const ALL: [Streaming; 2] = [Streaming::Aa, Streaming::TwoLattice];
-
-    /// Name for reports and the command line: "aa", "two-lattice".
-    pub fn name(self) -> &'static str {
-        match self {
-            Streaming::Aa => "aa",
-            Streaming::TwoLattice => "two-lattice",
-        }
-    }
-
-    /// The scheme named `name`, or `None`.
-    pub fn from_name(name: &str) -> Option<Self> {
-        Self::ALL.into_iter().find(|s| s.name() == name)
-    }
-}
 
 mod persist;
 
@@ -1674,6 +1643,25 @@ fn buffer_gap<T>(len: usize) -> usize {
     let size = std::mem::size_of::<T>().max(1);
     let end = (len * size) % 4096;
     (160 + 4096 - end) % 4096 / size
+}
+
+/// The execution settings applied to a lattice (defined here, beside the lattice, so that `exec` does not
+/// depend on `lattice`).
+impl Exec {
+    /// Use these settings on a lattice (instruction set and streaming scheme).
+    pub fn apply<T: Real>(&self, lattice: &mut FluidLattice<T>) {
+        // A level this CPU lacks cannot be constructed through `from_names`; fall back to the detected one.
+        if lattice.set_simd(self.simd).is_err() {
+            let _ = lattice.set_simd(SimdLevel::detect());
+        }
+        lattice.set_streaming(self.streaming);
+    }
+}
+
+impl<T: Real> ExecTarget for FluidLattice<T> {
+    fn take(&mut self, exec: &Exec) {
+        exec.apply(self);
+    }
 }
 
 #[cfg(test)]

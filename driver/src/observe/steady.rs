@@ -21,13 +21,21 @@ pub struct Steadiness {
 }
 
 impl Steadiness {
-    /// A criterion with nothing fed yet.
-    pub fn new(tolerance: f64, drift: bool) -> Self {
+    /// A criterion with nothing fed yet: steady once the relative change over an interval is below `tolerance`.
+    pub fn new(tolerance: f64) -> Self {
         Self {
             tolerance,
-            drift,
+            drift: false,
             last: None,
             last_change: None,
+        }
+    }
+
+    /// The same criterion that also accepts a constant drift (see the module documentation).
+    pub fn accepting_drift(self) -> Self {
+        Self {
+            drift: true,
+            ..self
         }
     }
 

@@ -177,6 +177,18 @@ pub trait Kind: Sized + 'static {
     /// Advance by one chunk of at least one step (the unit between interrupt checks: keep it short). `dir` is
     /// the run directory (snapshots written during the run), `None` for runs kept in memory.
     fn advance(case: &Case<Self>, state: &mut Self::State, dir: Option<&Path>) -> Result<()>;
+    /// [`Kind::advance`] as the run loop calls it, with the run's stop request: a kind whose chunk can be long
+    /// (the fracture test's intact-sample measurements, up to 4·10⁵ fluid steps) abandons it when `stop` is
+    /// raised and leaves the state exactly as it was before the chunk, which the loop then checkpoints; a
+    /// resume redoes the chunk from that state, bitwise as an uninterrupted run would. Default: `advance`.
+    fn advance_or_stop(
+        case: &Case<Self>,
+        state: &mut Self::State,
+        dir: Option<&Path>,
+        _stop: &Stop,
+    ) -> Result<()> {
+        Self::advance(case, state, dir)
+    }
     /// Health of the state after a chunk: [`LbdemError::Diverged`] / [`LbdemError::DivergedParticle`] (with
     /// an empty `out`, filled in by the loop) when a value is non-finite or out of its band.
     fn health(case: &Case<Self>, state: &Self::State) -> Result<()>;
@@ -463,7 +475,8 @@ fn drive_loop<K: Kind>(
             outputs(case, state, dir, OutputStage::Interrupted)?;
             return Ok(End::Interrupted(step));
         }
-        let chunk = K::advance(case, state, dir).and_then(|()| K::health(case, state));
+        let chunk =
+            K::advance_or_stop(case, state, dir, &opts.stop).and_then(|()| K::health(case, state));
         if let Err(e) = chunk {
             bar.finish_and_clear();
             let e = with_dir(e, dir);

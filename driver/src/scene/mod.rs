@@ -331,6 +331,30 @@ impl UnitsSetup {
         })
     }
 
+    /// [`UnitsSetup::new`] for a kind with free grains: the kind's `choose` (default collision and solid
+    /// operator at τ) checked by [`check_free_grain_fluid`] against the grains' `density_ratio`, its warnings
+    /// kept; `field` names the scene's solid-operator key.
+    pub fn with_free_grains(
+        fluid: &FluidSection,
+        field: &str,
+        density_ratio: f64,
+        choose: impl FnOnce(
+            f64,
+            &mut crate::units::Warnings,
+        ) -> (
+            crate::units::CollisionName,
+            lbdem_kernels::fluid::collide::SolidOperator,
+        ),
+    ) -> Result<Self> {
+        let mut s = Self::new(fluid)?;
+        let mut w = crate::units::Warnings(std::mem::take(&mut s.warnings));
+        let tau = s.units.tau;
+        let choice = choose(tau, &mut w);
+        check_free_grain_fluid(field, fluid, choice, tau, density_ratio, &mut w)?;
+        s.warnings = w.0;
+        Ok(s)
+    }
+
     /// The units' derived figures, labelled.
     pub fn describe(&self, labels: UnitLabels) -> String {
         self.units
@@ -445,6 +469,25 @@ fn lambda_free_grain_row(density_ratio: f64) -> (f64, f64, f64) {
         .find(|r| density_ratio >= r.0)
         .copied()
         .unwrap_or(LAMBDA_FREE_GRAIN_STABILITY[0])
+}
+
+/// The fluid of a kind with free grains, checked in one place: the collision the scene asks for
+/// (`[fluid] collision`, else the kind's default `choice.0`) in both precisions at `tau`, and the solid operator
+/// `choice.1` against the grains' `density_ratio` ([`check_free_grain_operator`], `field` naming the scene's
+/// operator key). Kinds call it once, from their set-up.
+pub fn check_free_grain_fluid(
+    field: &str,
+    fluid: &crate::units::FluidSection,
+    choice: (
+        crate::units::CollisionName,
+        lbdem_kernels::fluid::collide::SolidOperator,
+    ),
+    tau: f64,
+    density_ratio: f64,
+    warnings: &mut crate::units::Warnings,
+) -> Result<()> {
+    fluid.checked_collision(choice.0, tau)?;
+    check_free_grain_operator(field, choice.1, tau, density_ratio, warnings)
 }
 
 /// Check the PSM solid operator `op` (read from `field`) of a scene whose grains move freely under the fluid's

@@ -1,4 +1,4 @@
-//! Moving-solid cases for every solid operator (issue 11 item 4), through the `FluidLattice` and
+//! Moving-solid cases for every solid operator, through the `FluidLattice` and
 //! `CoupledWorld` APIs with the collision and operator chosen per run. Shared by `driver/tests/moving_solids.rs`
 //! and the example `driver/examples/moving_table.rs` (included with `#[path]`).
 //!

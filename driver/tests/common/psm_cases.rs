@@ -1,5 +1,5 @@
 //! Fixed-solid cases of the partially saturated method driven through the `FluidLattice` API with the collision
-//! and solid operator chosen per run (issue 11): the periodic square array of cylinders against Sangani &
+//! and solid operator chosen per run: the periodic square array of cylinders against Sangani &
 //! Acrivos (1982) and the permeability of a random pack of discs. Shared by `driver/tests/trt_psm.rs` and the
 //! example `driver/examples/tau_table.rs` (included with `#[path]`).
 //!

@@ -15,7 +15,6 @@
 use lbdem_kernels::Real;
 
 use super::packing::Packing;
-use super::staged::{BoundaryStressRun, CompressionRun};
 use super::world::{DemWorld, PlatenControl};
 
 /// Parameters of a compression test.
@@ -85,23 +84,6 @@ pub fn slope(points: &[(f64, f64)]) -> f64 {
     sxy / sxx
 }
 
-/// Run a compression test on a bonded packing (its world is advanced in place). `on_record` sees each
-/// recorded point (progress, output).
-pub fn run_compression<T: Real>(
-    packing: &mut Packing<T>,
-    test: &CompressionTest<T>,
-    mut on_record: impl FnMut(&DemWorld<T>, &CurvePoint),
-) -> CompressionResult {
-    let w = &mut packing.world;
-    let mut run = CompressionRun::new(w, packing.sample_box, *test);
-    while !run.finished {
-        if let Some(point) = run.advance(w) {
-            on_record(w, &point);
-        }
-    }
-    run.result(w)
-}
-
 /// The loading of the dissertation's fracture test (ch. 6.6) without fluid, its dry control: the lateral
 /// stress is held by servo platens on the left and right, the axial stress (along y, the sample's short axis)
 /// is applied as forces on the particles along the top boundary (the top platen is removed, so fluid could
@@ -118,21 +100,6 @@ pub struct BoundaryStressTest<T> {
     pub steps: u64,
     /// Steps between recorded points.
     pub record_interval: u64,
-}
-
-/// Run [`BoundaryStressTest`] on a packing: returns the record, with the axial strain measured from the mean
-/// height of the loaded particles (compression positive) and the lateral strain from the lateral platens.
-pub fn run_boundary_stress<T: Real>(
-    packing: &mut Packing<T>,
-    test: &BoundaryStressTest<T>,
-    mut on_record: impl FnMut(&DemWorld<T>, &CurvePoint),
-) -> Vec<CurvePoint> {
-    let w = &mut packing.world;
-    let mut run = BoundaryStressRun::new(w, packing.sample_box, *test);
-    while let Some(point) = run.advance(w) {
-        on_record(w, &point);
-    }
-    run.curve
 }
 
 /// Parameters of a Brazilian (diametral compression) test of a bonded disc (Potyondy & Cundall 2004): two flat rigid

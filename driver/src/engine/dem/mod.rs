@@ -21,10 +21,11 @@ pub mod staged;
 pub mod world;
 
 pub use loading::{
-    carve_disc, run_boundary_stress, run_brazilian, run_compression, BoundaryStressTest,
-    BrazilianPoint, BrazilianResult, BrazilianTest, CompressionResult, CompressionTest, CurvePoint,
+    carve_disc, run_brazilian, BoundaryStressTest, BrazilianPoint, BrazilianResult, BrazilianTest,
+    CompressionResult, CompressionTest, CurvePoint,
 };
 pub use packing::{boxed_sample, generate_packing, hexagonal_packing, Packing, PackingSpec};
+pub use staged::{run_boundary_stress, run_compression};
 pub use world::{Bond, BondLaw, BondSpec, BreakRecord, DemWorld, Platen, PlatenControl, SampleBox};
 
 use lbdem_kernels::dem::assembly::ContactModel;

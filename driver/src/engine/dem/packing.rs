@@ -184,7 +184,7 @@ pub fn check_packing_spec<T: Real>(s: &PackingSpec<T>) -> Result<()> {
                 field,
                 v.to_f64_exact(),
                 "must be a finite number > 0",
-                "see docs of lbdem::solid::packing::PackingSpec",
+                "see the documentation of lbdem::engine::dem::PackingSpec",
             ))
         }
     };

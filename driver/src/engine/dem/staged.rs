@@ -1,11 +1,13 @@
 //! The laboratory loadings of [`super::loading`] as resumable state machines: each [`CompressionRun::advance`]
 //! / [`BoundaryStressRun::advance`] runs one record interval (or what is left of the settling stage) and
 //! returns the recorded point, so that a run loop can check for interrupts, checkpoint the state between
-//! intervals, and continue bitwise exactly after a resume. [`super::loading::run_compression`] and
-//! [`super::loading::run_boundary_stress`] are these machines run to the end.
+//! intervals, and continue bitwise exactly after a resume. [`run_compression`] and
+//! [`run_boundary_stress`] are these machines run to the end.
+use lbdem_kernels::dem::servo::ServoLaw;
 use lbdem_kernels::Real;
 
 use super::loading::{slope, BoundaryStressTest, CompressionResult, CompressionTest, CurvePoint};
+use super::packing::Packing;
 use super::world::{DemWorld, PlatenControl, SampleBox};
 use serde::{Deserialize, Serialize};
 
@@ -13,7 +15,7 @@ fn axial_stress<T: Real>(w: &DemWorld<T>, b: &SampleBox) -> T {
     T::lit(0.5) * (w.platens[b.bottom].stress() + w.platens[b.top].stress())
 }
 
-/// A compression test in progress (see [`super::loading::run_compression`] for the procedure).
+/// A compression test in progress (see [`run_compression`] for the procedure).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct CompressionRun<T> {
     /// The test.
@@ -40,11 +42,11 @@ impl<T: Real> CompressionRun<T> {
         let width0 = w.platens[b.right].wall.point[0] - w.platens[b.left].wall.point[0];
         let confined = test.confining_stress > T::zero();
         if confined {
-            let servo = PlatenControl::Servo {
+            let servo = PlatenControl::Servo(ServoLaw {
                 target_stress: test.confining_stress,
                 relaxation: T::lit(0.5),
                 max_speed: T::lit(10.0) * test.platen_speed,
-            };
+            });
             w.platens[b.left].control = servo;
             w.platens[b.right].control = servo;
         } else {
@@ -185,7 +187,7 @@ impl<T: Real> CompressionRun<T> {
     }
 }
 
-/// A [`BoundaryStressTest`] in progress (see [`super::loading::run_boundary_stress`]).
+/// A [`BoundaryStressTest`] in progress (see [`run_boundary_stress`]).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct BoundaryStressRun<T> {
     /// The test.
@@ -212,11 +214,11 @@ impl<T: Real> BoundaryStressRun<T> {
         w.platens[b.bottom].control = PlatenControl::Speed(T::zero());
         for side in [b.left, b.right] {
             w.platens[side].length = height;
-            w.platens[side].control = PlatenControl::Servo {
+            w.platens[side].control = PlatenControl::Servo(ServoLaw {
                 target_stress: test.lateral_stress,
                 relaxation: T::lit(0.5),
                 max_speed: T::lit(1e-3) * height / w.timestep(),
-            };
+            });
         }
         let top = w.boundary_particles(3, test.boundary_depth);
         w.apply_boundary_stress(
@@ -289,4 +291,36 @@ impl<T: Real> BoundaryStressRun<T> {
         self.curve.push(point);
         Some(point)
     }
+}
+
+/// Run a compression test on a bonded packing (its world is advanced in place). `on_record` sees each
+/// recorded point (progress, output).
+pub fn run_compression<T: Real>(
+    packing: &mut Packing<T>,
+    test: &CompressionTest<T>,
+    mut on_record: impl FnMut(&DemWorld<T>, &CurvePoint),
+) -> CompressionResult {
+    let w = &mut packing.world;
+    let mut run = CompressionRun::new(w, packing.sample_box, *test);
+    while !run.finished {
+        if let Some(point) = run.advance(w) {
+            on_record(w, &point);
+        }
+    }
+    run.result(w)
+}
+
+/// Run [`BoundaryStressTest`] on a packing: returns the record, with the axial strain measured from the mean
+/// height of the loaded particles (compression positive) and the lateral strain from the lateral platens.
+pub fn run_boundary_stress<T: Real>(
+    packing: &mut Packing<T>,
+    test: &BoundaryStressTest<T>,
+    mut on_record: impl FnMut(&DemWorld<T>, &CurvePoint),
+) -> Vec<CurvePoint> {
+    let w = &mut packing.world;
+    let mut run = BoundaryStressRun::new(w, packing.sample_box, *test);
+    while let Some(point) = run.advance(w) {
+        on_record(w, &point);
+    }
+    run.curve
 }

@@ -116,19 +116,16 @@ pub struct BreakRecord<T> {
 
 /// How a platen moves.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(bound(
+    serialize = "T: Real + Serialize",
+    deserialize = "T: Real + Deserialize<'de>"
+))]
 pub enum PlatenControl<T> {
     /// Moves at a constant speed along its normal (positive: into the sample). Zero holds it fixed.
     Speed(T),
-    /// Servo-controlled to hold `target_stress` (compression positive): each step
-    /// v = G (σ_target − σ), G = `relaxation` · L/(k_n N_c Δt) (PFC), |v| ≤ `max_speed`.
-    Servo {
-        /// Stress to hold.
-        target_stress: T,
-        /// Servo relaxation factor λ in (0, 1] (PFC uses ≈ 0.5).
-        relaxation: T,
-        /// Speed limit (length/time).
-        max_speed: T,
-    },
+    /// Servo-controlled to hold a stress by the kernels' [`ServoLaw`] (each step v = G (σ_target − σ),
+    /// G = λ L/(k_n N_c Δt) (PFC), |v| ≤ v_max).
+    Servo(ServoLaw<T>),
 }
 
 /// A straight rigid wall that may move along its normal.
@@ -900,16 +897,7 @@ impl<T: Real> DemWorld<T> {
         for pl in self.platens.iter_mut() {
             pl.speed = match pl.control {
                 PlatenControl::Speed(v) => v,
-                PlatenControl::Servo {
-                    target_stress,
-                    relaxation,
-                    max_speed,
-                } => ServoLaw {
-                    target_stress,
-                    relaxation,
-                    max_speed,
-                }
-                .speed(pl.stress(), pl.length, kn, pl.contacts, dt),
+                PlatenControl::Servo(law) => law.speed(pl.stress(), pl.length, kn, pl.contacts, dt),
             };
             if pl.active {
                 pl.wall.point[0] += pl.wall.normal[0] * pl.speed * dt;

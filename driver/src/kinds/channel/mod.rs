@@ -238,7 +238,7 @@ impl ChannelSetup {
         let width = self.ny as f64 * h;
         let y = (j as f64 + 0.5) * h;
         let mu = self.units.density * self.units.viscosity;
-        self.pressure_gradient / (2.0 * mu) * y * (width - y)
+        lbdem_reference::analytic::poiseuille_velocity(self.pressure_gradient, mu, width, y)
     }
 
     /// Human-readable table of the derived parameters.
@@ -416,7 +416,7 @@ impl<T: Real> ChannelRun<T> {
         let mass0 = lattice.mass();
         Ok(Self {
             lattice,
-            criterion: Steadiness::new(case.scene.run.steady_tolerance.unwrap_or(0.0), false),
+            criterion: Steadiness::new(case.scene.run.steady_tolerance.unwrap_or(0.0)),
             steady: false,
             mass0,
         })

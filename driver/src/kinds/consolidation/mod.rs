@@ -20,8 +20,7 @@ use crate::output::snapshots::{chunk_with_snapshots, write_coupled_at_step, Snap
 use crate::output::{csv, write_atomic};
 use crate::run::{run_in_memory, Case, Kind, OutputStage, Persist, RunOptions};
 use crate::scene::{
-    check_free_grain_operator, free_grain_choice, CheckpointSection, SceneHeader, SnapshotSection,
-    UnitsSetup,
+    free_grain_choice, CheckpointSection, SceneHeader, SnapshotSection, UnitsSetup,
 };
 use crate::units::{collision_of, CollisionName, FluidSection, Warnings};
 
@@ -308,15 +307,6 @@ impl Kind for Consolidation {
     fn validate(scene: &ConsolidationScene) -> Result<()> {
         let u = crate::scene::f64_bgk_units(&scene.scene, &scene.fluid)?;
         scene.output.validate()?;
-        let (default_collision, op) = fluid_choice(scene, u.tau, &mut Warnings::default());
-        scene.fluid.checked_collision(default_collision, u.tau)?;
-        check_free_grain_operator(
-            "consolidation.solid_operator",
-            op,
-            u.tau,
-            scene.consolidation.grain_density / scene.fluid.density,
-            &mut Warnings::default(),
-        )?;
 
         let c = &scene.consolidation;
         positive("consolidation.radius", c.radius, "grain radius")?;
@@ -413,18 +403,12 @@ impl Kind for Consolidation {
     }
 
     fn setup(scene: &ConsolidationScene) -> Result<UnitsSetup> {
-        let mut s = UnitsSetup::new(&scene.fluid)?;
-        let mut w = Warnings(std::mem::take(&mut s.warnings));
-        let (_, op) = fluid_choice(scene, s.units.tau, &mut w);
-        check_free_grain_operator(
+        UnitsSetup::with_free_grains(
+            &scene.fluid,
             "consolidation.solid_operator",
-            op,
-            s.units.tau,
             scene.consolidation.grain_density / scene.fluid.density,
-            &mut w,
-        )?;
-        s.warnings = w.0;
-        Ok(s)
+            |tau, w| fluid_choice(scene, tau, w),
+        )
     }
 
     fn describe(case: &Case<Self>) -> String {

@@ -228,7 +228,7 @@ impl<T: Real> CaseRun for ArrayRun<T> {
             eps,
             mass0,
             flow: SteadyFlow::new(
-                Steadiness::new(case.steady_tolerance, true),
+                Steadiness::new(case.steady_tolerance).accepting_drift(),
                 case.check_interval,
                 case.max_steps,
             ),

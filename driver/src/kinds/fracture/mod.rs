@@ -28,6 +28,7 @@ pub mod figures;
 use std::path::Path;
 use std::time::Instant;
 
+use lbdem_kernels::dem::servo::ServoLaw;
 use lbdem_kernels::fluid::boundary::{Boundaries, SideCondition};
 use lbdem_kernels::fluid::collide::{SolidOperator, Weighting};
 use lbdem_kernels::fluid::lattice::Side;
@@ -49,13 +50,13 @@ use crate::observe::steady::Steadiness;
 use crate::output::snapshots::write_series;
 use crate::output::vtk::{lattice_field, BreakClock, LatticeFrame, Stamp, Units};
 use crate::output::{csv, write_atomic, SCENE_COPY};
-use crate::run::{Case, Kind, OutputStage, Persist};
+use crate::run::{Case, Kind, OutputStage, Persist, Stop};
 use crate::scene::solid::packing_budget;
 use crate::scene::solid::{
     bond_spec, critical_time_step, packing_spec, validate_packing_and_solid, PackingSection,
     SolidSection,
 };
-use crate::scene::{check_free_grain_operator, free_grain_choice, CheckpointSection, SceneHeader};
+use crate::scene::{check_free_grain_fluid, free_grain_choice, CheckpointSection, SceneHeader};
 use crate::units::{
     check_density_drop, check_tau, collision_of, CollisionName, FluidSection, LatticeUnits,
     Warnings,
@@ -397,11 +398,11 @@ impl FractureScene {
         positive("fluid.spacing", f.spacing, "table 6.2: 0.009 cm")?;
         let units = LatticeUnits::from_fluid(&f.section())?;
         check_tau(&units, warnings);
-        let (collision, op) = self.fluid_choice(f, units.tau, warnings);
-        f.section().checked_collision(collision, units.tau)?;
-        check_free_grain_operator(
+        let choice = self.fluid_choice(f, units.tau, warnings);
+        check_free_grain_fluid(
             "fluid.solid_operator",
-            op,
+            &f.section(),
+            choice,
             units.tau,
             self.packing.density / f.density,
             warnings,
@@ -432,11 +433,11 @@ impl FractureScene {
         let drop = self.loading.pressure_drop / (f.density * units.sound_speed.powi(2));
         check_density_drop("loading.pressure_drop", drop, warnings)?;
         // Darcy estimate of the drainage speed over the first grain layers: u ≈ (k/μ) Δp / ℓ with
-        // ℓ ≈ 2 grain sizes and k from the Kozeny–Carman form for discs, k = n³ D²/(80 (1 − n)²)
-        // (Carman 1937, for discs), with n the porosity the fluid sees.
+        // ℓ ≈ 2 grain sizes and k from the Kozeny–Carman form for discs, k = n³ D²/(80 (1 − n)²), i.e. a
+        // Kozeny constant of 5 (Carman 1937), with n the porosity the fluid sees.
         let n = 1.0 - self.packing.solid_fraction * f.fluid_radius.powi(2);
         let d = 2.0 * self.packing.radius_min * self.packing.aspect_ratio * f.fluid_radius;
-        let k = n.powi(3) * d * d / (80.0 * (1.0 - n).powi(2));
+        let k = lbdem_reference::analytic::kozeny_carman(n, d, 5.0);
         let u = k / (f.viscosity * f.density) * self.loading.pressure_drop
             / (4.0 * self.packing.radius_max)
             / n;
@@ -449,8 +450,8 @@ impl FractureScene {
             density_low: 1.0 - 0.5 * drop,
             expected_mach,
             nodes_per_grain: d / h,
-            collision_default: collision,
-            solid_operator: op,
+            collision_default: choice.0,
+            solid_operator: choice.1,
         })
     }
 
@@ -718,11 +719,11 @@ pub fn prepare_packed(scene: &FractureScene, packing: Packing<f64>) -> Result<Fr
     world.sample_box = None;
     for side in [b.bottom, b.top] {
         world.platens[side].length = width;
-        world.platens[side].control = PlatenControl::Servo {
+        world.platens[side].control = PlatenControl::Servo(ServoLaw {
             target_stress: scene.loading.lateral_stress,
             relaxation: 0.5,
             max_speed: 1e-3 * height / world.timestep(),
-        };
+        });
     }
     let depth = scene
         .loading
@@ -915,7 +916,8 @@ impl<'a, S: std::ops::Deref<Target = FractureState>> FractureRun<'a, S> {
 
     /// Steady Darcy flow through the intact sample (table 6.3's method): grains fixed, a small pressure
     /// difference across the ends, run until the flux settles; k = μ q L/Δp with q the superficial flux.
-    fn measure_permeability(&self) -> Result<serde_json::Value> {
+    /// `Ok(None)`: abandoned on a stop request (nothing of the state changed).
+    fn measure_permeability(&self, stop: &Stop) -> Result<Option<serde_json::Value>> {
         let fp = self.fluid().expect("fluid");
         let setup = fp.setup;
         let [nx, ny] = setup.nodes;
@@ -940,9 +942,13 @@ impl<'a, S: std::ops::Deref<Target = FractureState>> FractureRun<'a, S> {
             s / (nx as f64)
         };
         // Steady when the flux changes by less than 1e-5 relative over 500 steps (at most 400 000 steps).
-        let mut flow = SteadyFlow::new(Steadiness::new(1e-5, false), 500, 400_000);
+        let mut flow = SteadyFlow::new(Steadiness::new(1e-5), 500, 400_000);
         let hint = "the intact-sample permeability run diverged: lower tau's distance to 1/2 or the grains' fluid radius";
-        while !flow.advance(&mut lattice, flux, hint)? {}
+        while !flow.advance(&mut lattice, flux, hint)? {
+            if stop.requested() {
+                return Ok(None);
+            }
+        }
         let (q, steps) = (flow.flux, flow.steps);
         // Darcy: q = (k/μ) Δp/L with q the flux per unit height (= Σ u over a column / ny × ny h …): in
         // lattice units k* = ν* q* L*/(Δp*) with Δp* = Δρ/3 over L* = nx − 1, q* = flux per unit height.
@@ -959,15 +965,17 @@ impl<'a, S: std::ops::Deref<Target = FractureState>> FractureRun<'a, S> {
         eprintln!(
             "lbdem: intact-sample permeability k = {k:.3e} (lattice {k_lattice:.3e}), fluid porosity {n_fluid:.3} ({steps} steps)"
         );
-        let transient = self.measure_diffusivity(&bodies, k_lattice, n_fluid)?;
-        Ok(json!({
+        let Some(transient) = self.measure_diffusivity(&bodies, k_lattice, n_fluid, stop)? else {
+            return Ok(None);
+        };
+        Ok(Some(json!({
             "permeability": k,
             "fluid_porosity_of_lattice": n_fluid,
             "steps": steps,
             "converged": flow.steady,
             "note": "over the whole lattice including the free fluid beyond the ends (a series correction is not applied)",
             "transient": transient,
-        }))
+        })))
     }
 
     /// Hydraulic diffusivity and storage of the intact sample by the transient method of ch. 5.6 (table 6.3's
@@ -981,7 +989,8 @@ impl<'a, S: std::ops::Deref<Target = FractureState>> FractureRun<'a, S> {
         bodies: &[lbdem_kernels::coupling::CoupledBody<f64>],
         k_lattice: f64,
         n_fluid: f64,
-    ) -> Result<serde_json::Value> {
+        stop: &Stop,
+    ) -> Result<Option<serde_json::Value>> {
         let fp = self.fluid().expect("fluid");
         let [nx, ny] = fp.setup.nodes;
         let units = fp.setup.units;
@@ -1008,6 +1017,9 @@ impl<'a, S: std::ops::Deref<Target = FractureState>> FractureRun<'a, S> {
         for k in 0..snapshots {
             let target = t_start + (t_end - t_start) * k / (snapshots - 1);
             while t < target {
+                if stop.requested() {
+                    return Ok(None);
+                }
                 lattice.step();
                 t += 1;
             }
@@ -1043,7 +1055,7 @@ impl<'a, S: std::ops::Deref<Target = FractureState>> FractureRun<'a, S> {
             guess * units.spacing * units.spacing / units.timestep,
             half_phys * half_phys / c_phys
         );
-        Ok(json!({
+        Ok(Some(json!({
             "diffusivity": c_phys,
             "rigid_skeleton_prediction": guess * units.spacing * units.spacing / units.timestep,
             "storage": storage,
@@ -1055,7 +1067,7 @@ impl<'a, S: std::ops::Deref<Target = FractureState>> FractureRun<'a, S> {
             "samples": samples.len(),
             "steps": t,
             "note": "grains held fixed: the storage is that of the LB fluid in the pores (1/(rho c_s^2) per unit pore volume)",
-        }))
+        })))
     }
 
     /// The tables so far, and the figures when `figures` (and the scene's `output.figures`).
@@ -1188,11 +1200,14 @@ impl<'a, S: std::ops::Deref<Target = FractureState>> FractureRun<'a, S> {
 impl<'a, S: std::ops::DerefMut<Target = FractureState>> FractureRun<'a, S> {
     /// One chunk: before the drop, the intact-sample measurements (when asked for), the first record and
     /// snapshot and the drop itself; after it, one record interval (with a snapshot when due, and the last one
-    /// at the end).
-    fn advance(&mut self, dir: Option<&Path>) -> Result<()> {
+    /// at the end). A stop request during the measurements abandons the chunk with the state untouched.
+    fn advance(&mut self, dir: Option<&Path>, stop: &Stop) -> Result<()> {
         if !self.state.dropped {
             if self.state.coupled.is_some() && self.scene.output.permeability {
-                self.state.permeability = self.measure_permeability()?.to_string();
+                match self.measure_permeability(stop)? {
+                    Some(v) => self.state.permeability = v.to_string(),
+                    None => return Ok(()),
+                }
             }
             self.record()?;
             if let Some(d) = dir {
@@ -1572,11 +1587,20 @@ impl Kind for FractureTest {
     }
 
     fn advance(case: &Case<Self>, state: &mut FractureState, dir: Option<&Path>) -> Result<()> {
+        Self::advance_or_stop(case, state, dir, &Stop::new())
+    }
+
+    fn advance_or_stop(
+        case: &Case<Self>,
+        state: &mut FractureState,
+        dir: Option<&Path>,
+        stop: &Stop,
+    ) -> Result<()> {
         FractureRun {
             scene: &case.scene,
             state,
         }
-        .advance(dir)
+        .advance(dir, stop)
     }
 
     fn health(case: &Case<Self>, state: &FractureState) -> Result<()> {

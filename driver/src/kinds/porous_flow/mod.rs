@@ -294,7 +294,7 @@ impl<T: Real> CaseRun for PorousRun<T> {
             lattice,
             eps,
             flow: SteadyFlow::new(
-                Steadiness::new(case.steady_tolerance, true),
+                Steadiness::new(case.steady_tolerance).accepting_drift(),
                 case.check_interval,
                 case.max_steps,
             ),

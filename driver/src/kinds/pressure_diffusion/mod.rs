@@ -262,11 +262,7 @@ fn start(case: &Case<PressureDiffusion>, exec: &Exec) -> Result<DiffusionState> 
         nx,
         ny,
         darcy: Some(darcy),
-        flow: SteadyFlow::new(
-            Steadiness::new(DARCY_TOLERANCE, false),
-            200,
-            DARCY_MAX_STEPS,
-        ),
+        flow: SteadyFlow::new(Steadiness::new(DARCY_TOLERANCE), 200, DARCY_MAX_STEPS),
         drho_d,
         permeability: f64::NAN,
         geometric_porosity: f64::NAN,

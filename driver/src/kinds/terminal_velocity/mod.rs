@@ -40,8 +40,7 @@ use crate::output::vtk::{LatticeFrame, Scale, Stamp};
 use crate::output::{csv, write_atomic};
 use crate::run::{run_in_memory, Case, Kind, OutputStage, Persist, RunOptions};
 use crate::scene::{
-    check_free_grain_operator, free_grain_choice, CheckpointSection, SceneHeader, SnapshotSection,
-    UnitsSetup,
+    free_grain_choice, CheckpointSection, SceneHeader, SnapshotSection, UnitsSetup,
 };
 use crate::units::{collision_of, CollisionName, FluidSection, Warnings};
 
@@ -448,15 +447,6 @@ impl Kind for TerminalVelocity {
                 "refine fluid.spacing or enlarge the box",
             ));
         }
-        let (default_collision, op) = fluid_choice(scene, u.tau, &mut Warnings::default());
-        scene.fluid.checked_collision(default_collision, u.tau)?;
-        check_free_grain_operator(
-            "terminal_velocity.solid_operator",
-            op,
-            u.tau,
-            t.grain_density / scene.fluid.density,
-            &mut Warnings::default(),
-        )?;
         if let Some(f) = t.average_fraction {
             if !(f > 0.0 && f <= 0.5) {
                 return Err(LbdemError::field(
@@ -512,19 +502,12 @@ impl Kind for TerminalVelocity {
     }
 
     fn setup(scene: &TerminalVelocityScene) -> Result<UnitsSetup> {
-        let mut s = UnitsSetup::new(&scene.fluid)?;
-        let t = &scene.terminal_velocity;
-        let mut w = Warnings(std::mem::take(&mut s.warnings));
-        let (_, op) = fluid_choice(scene, s.units.tau, &mut w);
-        check_free_grain_operator(
+        UnitsSetup::with_free_grains(
+            &scene.fluid,
             "terminal_velocity.solid_operator",
-            op,
-            s.units.tau,
-            t.grain_density / scene.fluid.density,
-            &mut w,
-        )?;
-        s.warnings = w.0;
-        Ok(s)
+            scene.terminal_velocity.grain_density / scene.fluid.density,
+            |tau, w| fluid_choice(scene, tau, w),
+        )
     }
 
     fn describe(case: &Case<Self>) -> String {

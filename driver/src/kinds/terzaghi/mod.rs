@@ -32,8 +32,7 @@ use crate::output::snapshots::{chunk_with_snapshots, write_coupled_at_step, Snap
 use crate::output::{csv, write_atomic};
 use crate::run::{run_in_memory, Case, Kind, OutputStage, Persist, RunOptions};
 use crate::scene::{
-    check_free_grain_operator, free_grain_choice, CheckpointSection, SceneHeader, SnapshotSection,
-    UnitsSetup,
+    free_grain_choice, CheckpointSection, SceneHeader, SnapshotSection, UnitsSetup,
 };
 use crate::units::{collision_of, CollisionName, FluidSection, Warnings, CS2};
 
@@ -507,7 +506,11 @@ fn start(case: &Case<Terzaghi>, exec: &Exec) -> Result<TerzaghiState> {
     Ok(TerzaghiState {
         world,
         darcy: Some(darcy),
-        flow: SteadyFlow::new(Steadiness::new(DARCY_TOLERANCE, true), 200, 400_000),
+        flow: SteadyFlow::new(
+            Steadiness::new(DARCY_TOLERANCE).accepting_drift(),
+            200,
+            400_000,
+        ),
         nx,
         ny,
         pack_rows,
@@ -956,15 +959,6 @@ impl Kind for Terzaghi {
             ));
         }
         crate::scene::check_resolved("terzaghi.radius_min", c.radius_min, c.fluid_radius, &u)?;
-        let (default_collision, op) = fluid_choice(scene, u.tau, &mut Warnings::default());
-        scene.fluid.checked_collision(default_collision, u.tau)?;
-        check_free_grain_operator(
-            "terzaghi.solid_operator",
-            op,
-            u.tau,
-            c.grain_density / scene.fluid.density,
-            &mut Warnings::default(),
-        )?;
         Ok(())
     }
 
@@ -1008,18 +1002,12 @@ impl Kind for Terzaghi {
     }
 
     fn setup(scene: &TerzaghiScene) -> Result<UnitsSetup> {
-        let mut s = UnitsSetup::new(&scene.fluid)?;
-        let mut w = Warnings(std::mem::take(&mut s.warnings));
-        let (_, op) = fluid_choice(scene, s.units.tau, &mut w);
-        check_free_grain_operator(
+        UnitsSetup::with_free_grains(
+            &scene.fluid,
             "terzaghi.solid_operator",
-            op,
-            s.units.tau,
             scene.terzaghi.grain_density / scene.fluid.density,
-            &mut w,
-        )?;
-        s.warnings = w.0;
-        Ok(s)
+            |tau, w| fluid_choice(scene, tau, w),
+        )
     }
 
     fn describe(case: &Case<Self>) -> String {
