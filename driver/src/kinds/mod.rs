@@ -24,6 +24,8 @@ pub mod terzaghi;
 pub struct Entry {
     /// `[scene] kind` of its scene files and kind tag of its checkpoints.
     pub name: &'static str,
+    /// The top-level section only its scene files have ([`Kind::OWN_SECTION`]).
+    pub own_section: Option<&'static str>,
     /// `lbdem check`: (scene text, path) → the description.
     pub check: fn(&str, &str) -> Result<String>,
     /// `lbdem run`: (scene text, path, output directory, options) → the summary.
@@ -35,6 +37,7 @@ pub struct Entry {
 const fn entry<K: Kind>() -> Entry {
     Entry {
         name: K::NAME,
+        own_section: K::OWN_SECTION,
         check: run::check::<K>,
         run: run::run::<K>,
         resume: run::resume::<K>,
@@ -73,16 +76,8 @@ pub fn names() -> String {
 /// The kind whose scene files have the top-level section `section` (its own section, not one shared by several
 /// kinds), for the hint of a scene whose `[scene] kind` does not match its sections.
 pub fn owner_of_section(section: &str) -> Option<&'static str> {
-    const OWN: [(&str, &str); 9] = [
-        ("channel", "channel"),
-        ("cylinder_array", "cylinder_array"),
-        ("porous", "porous_flow"),
-        ("terminal_velocity", "terminal_velocity"),
-        ("pressure_diffusion", "pressure_diffusion"),
-        ("fluid_compressibility", "fluid_compressibility"),
-        ("consolidation", "consolidation"),
-        ("terzaghi", "terzaghi"),
-        ("demo", "coupled_demo"),
-    ];
-    OWN.iter().find(|(s, _)| *s == section).map(|(_, k)| *k)
+    REGISTRY
+        .iter()
+        .find(|e| e.own_section == Some(section))
+        .map(|e| e.name)
 }

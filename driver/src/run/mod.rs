@@ -124,6 +124,9 @@ pub trait Derived: Serialize + Sync {
 pub trait Kind: Sized + 'static {
     /// `[scene] kind` of its scene files, and the kind tag of its checkpoints.
     const NAME: &'static str;
+    /// The top-level section only this kind's scene files have (`[porous]` for `porous_flow`), if any: names
+    /// the kind a scene file was probably meant to be when its `[scene] kind` does not match its sections.
+    const OWN_SECTION: Option<&'static str> = None;
     /// The scene file (TOML, `deny_unknown_fields`).
     type Scene: SceneFile;
     /// What is derived from the scene before running (printed by `lbdem check`, `derived` in the summary).

@@ -516,6 +516,7 @@ pub struct Channel;
 
 impl Kind for Channel {
     const NAME: &'static str = "channel";
+    const OWN_SECTION: Option<&'static str> = Some("channel");
     type Scene = ChannelScene;
     type Setup = ChannelSetup;
     type State = ChannelState;

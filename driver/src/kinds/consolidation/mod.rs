@@ -300,6 +300,7 @@ pub struct Consolidation;
 
 impl Kind for Consolidation {
     const NAME: &'static str = "consolidation";
+    const OWN_SECTION: Option<&'static str> = Some("consolidation");
     type Scene = ConsolidationScene;
     type Setup = UnitsSetup;
     type State = ConsolidationState;

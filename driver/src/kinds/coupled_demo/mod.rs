@@ -214,6 +214,7 @@ pub struct CoupledDemo;
 
 impl Kind for CoupledDemo {
     const NAME: &'static str = "coupled_demo";
+    const OWN_SECTION: Option<&'static str> = Some("demo");
     type Scene = DemoScene;
     type Setup = DemoSection;
     type State = DemoState;

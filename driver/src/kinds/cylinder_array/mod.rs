@@ -520,6 +520,7 @@ pub struct CylinderArray;
 
 impl Kind for CylinderArray {
     const NAME: &'static str = "cylinder_array";
+    const OWN_SECTION: Option<&'static str> = Some("cylinder_array");
     const NOT_MEASURED: &'static [&'static str] =
         &["drift_per_step", "reference_drag", "drag_error"];
     type Scene = CylinderArrayScene;

@@ -359,6 +359,7 @@ pub struct FluidCompressibility;
 
 impl Kind for FluidCompressibility {
     const NAME: &'static str = "fluid_compressibility";
+    const OWN_SECTION: Option<&'static str> = Some("fluid_compressibility");
     type Scene = CompressibilityScene;
     type Setup = UnitsSetup;
     type State = CompressibilityState;

@@ -679,6 +679,7 @@ pub struct PorousFlow;
 
 impl Kind for PorousFlow {
     const NAME: &'static str = "porous_flow";
+    const OWN_SECTION: Option<&'static str> = Some("porous");
     const NOT_MEASURED: &'static [&'static str] = &[
         "drift_per_step",
         "sangani_acrivos_error",

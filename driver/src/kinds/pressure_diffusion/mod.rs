@@ -504,6 +504,7 @@ pub struct PressureDiffusion;
 
 impl Kind for PressureDiffusion {
     const NAME: &'static str = "pressure_diffusion";
+    const OWN_SECTION: Option<&'static str> = Some("pressure_diffusion");
     type Scene = PressureDiffusionScene;
     type Setup = UnitsSetup;
     type State = DiffusionState;

@@ -409,6 +409,7 @@ pub struct TerminalVelocity;
 
 impl Kind for TerminalVelocity {
     const NAME: &'static str = "terminal_velocity";
+    const OWN_SECTION: Option<&'static str> = Some("terminal_velocity");
     type Scene = TerminalVelocityScene;
     type Setup = UnitsSetup;
     type State = TerminalState;

@@ -829,6 +829,7 @@ pub struct Terzaghi;
 
 impl Kind for Terzaghi {
     const NAME: &'static str = "terzaghi";
+    const OWN_SECTION: Option<&'static str> = Some("terzaghi");
     const NOT_MEASURED: &'static [&'static str] = &[
         "stored_fraction_early",
         "stored_fraction_late",
