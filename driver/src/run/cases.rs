@@ -54,13 +54,16 @@ pub trait CaseRun: Sized {
     }
 }
 
-/// One case run to its end in memory (no checkpoint, no health check between chunks): its outcome and the wall
-/// time it took in seconds.
+/// One case run to its end in memory (no checkpoint; the health check once at the end, outside the timed
+/// loop, besides whatever the case's own chunks check): its outcome and the wall time of the loop in seconds.
 pub fn solve<R: CaseRun>(case: &R::Case, exec: &Exec) -> Result<(R::Outcome, f64)> {
     let start = Instant::now();
     let mut run = R::start(case, exec)?;
     while !run.advance(case)? {}
-    Ok((run.outcome(case), start.elapsed().as_secs_f64()))
+    let outcome = run.outcome(case);
+    let seconds = start.elapsed().as_secs_f64();
+    run.health()?;
+    Ok((outcome, seconds))
 }
 
 /// The finished cases and the one in progress.
