@@ -72,6 +72,19 @@ pub struct UnitLabels {
     pub viscosity: &'static str,
 }
 
+impl UnitLabels {
+    /// Lattice units (spacing h, step dt, reference density rho0), for a scene simulated and written in them
+    /// (`coupled_demo`).
+    pub const LATTICE: UnitLabels = UnitLabels {
+        length: "h",
+        time: "dt",
+        density: "rho0",
+        pressure: "rho0*h^2/dt^2",
+        velocity: "h/dt",
+        viscosity: "h^2/dt",
+    };
+}
+
 /// `[fluid]`: physical fluid properties and the lattice resolution.
 #[derive(Clone, Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]

@@ -5,8 +5,8 @@
 //! and values against `summary.json` and the CSV tables of the same run.
 //!
 //! Without `python3` and its `vtk` package the Python half is skipped with a loud message on a developer
-//! machine, and fails under CI (`CI` set, as `.ci/run` runs, which installs `vtk`) or with
-//! `LBDEM_REQUIRE_VTK=1`. Install: `python3 -m pip install vtk==9.7.1`.
+//! machine, and fails with `LBDEM_REQUIRE_VTK=1` (what `.ci/run` sets, after installing `vtk`) or with `CI` set
+//! to a true value. Install: `python3 -m pip install vtk==9.7.1`.
 use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::sync::OnceLock;
@@ -419,6 +419,31 @@ fn every_output_parses_and_agrees_with_the_tables() {
                 "kinetic energy {ke} vs history.csv {ke_table}"
             );
         }
+        // The unit labels: the scene's system (cgs) for the physical kinds; lattice units, named as such, for
+        // coupled_demo (simulated in them), in the files and in summary.json alike.
+        let lattice_units = *kind == "coupled_demo";
+        let want = if lattice_units {
+            [
+                ("velocity", "h/dt"),
+                ("mass", "rho0*h^2"),
+                ("angular_velocity", "rad/dt"),
+            ]
+        } else {
+            [
+                ("velocity", "cm/s"),
+                ("mass", "g"),
+                ("angular_velocity", "rad/s"),
+            ]
+        };
+        for (array, unit) in want {
+            assert_eq!(
+                grains[0].1.unit(array),
+                Some(unit),
+                "{kind}: unit of {array}"
+            );
+        }
+        let length = if lattice_units { "h" } else { "cm" };
+        assert_eq!(s["units"]["length"], length, "{kind}: summary.json units");
         if *kind == "coupled_demo" {
             // The last row of series.csv (step 200) is the last snapshot: grain momentum and kinetic energy.
             let table = csv(&dir.join("series.csv"));
@@ -497,6 +522,16 @@ fn every_output_parses_and_agrees_with_the_tables() {
         assert!(
             (covered - area).abs() <= 1e-6 * area,
             "{kind}: the t = 0 lattice covers {covered} nodes, the grains {area}"
+        );
+        let pressure_unit = if lattice_units {
+            "rho0*h^2/dt^2"
+        } else {
+            "dyne/cm^2"
+        };
+        assert_eq!(
+            l0.unit("pressure"),
+            Some(pressure_unit),
+            "{kind}: pressure unit"
         );
         let (u, eps, pressure) = {
             let v = &lattice.last().unwrap().1;

@@ -97,8 +97,36 @@ fn log_range(values: impl Iterator<Item = f64>) -> std::ops::Range<f64> {
     lo / 10f64.powf(0.15)..hi * 10f64.powf(0.25)
 }
 
-/// Draw `series` on log–log axes into the PNG file `path` (written to a temporary name and renamed).
+/// Draw a PNG file atomically: `draw` renders it onto the temporary name it is given (`STEM.tmp.png`, in the
+/// same directory: the bitmap encoder picks the format from the extension, so ".png" stays at the end), which
+/// is then renamed onto `path` and recorded in the manifest ([`crate::output::record_output`]). A reader never
+/// sees a half-drawn figure; a temporary file left by an interrupted drawing is recognised by `--overwrite`
+/// (`STEM.tmp.png` of a listed `STEM.png`), and one left by a failed drawing is removed.
+pub fn atomic_png<E: From<LbdemError>>(
+    path: &Path,
+    draw: impl FnOnce(&Path) -> std::result::Result<(), E>,
+) -> std::result::Result<(), E> {
+    let tmp = path.with_extension("tmp.png");
+    if let Err(e) = draw(&tmp) {
+        let _ = std::fs::remove_file(&tmp);
+        return Err(e);
+    }
+    std::fs::rename(&tmp, path).map_err(|e| LbdemError::Write {
+        path: path.display().to_string(),
+        source: e,
+    })?;
+    crate::output::record_output(path)?;
+    Ok(())
+}
+
+/// Draw `series` on log–log axes into the PNG file `path` (written to a temporary name and renamed:
+/// [`atomic_png`]).
 pub fn loglog_png(path: &Path, plot: &LogLogPlot, series: &[Series]) -> Result<()> {
+    atomic_png(path, |tmp| loglog_draw(tmp, path, plot, series))
+}
+
+/// [`loglog_png`]'s drawing onto `tmp` (errors name `path`).
+fn loglog_draw(tmp: &Path, path: &Path, plot: &LogLogPlot, series: &[Series]) -> Result<()> {
     register_fonts();
     let ok = |x: f64, y: f64| x.is_finite() && y.is_finite() && x > 0.0 && y > 0.0;
     let pts = || {
@@ -113,10 +141,8 @@ pub fn loglog_png(path: &Path, plot: &LogLogPlot, series: &[Series]) -> Result<(
             .map(|p| p.1)
             .chain(plot.h_lines.iter().map(|l| l.0).filter(|y| *y > 0.0)),
     );
-    // The bitmap encoder picks the format from the extension: keep ".png" at the end of the temporary name.
-    let tmp = path.with_extension("tmp.png");
     {
-        let root = BitMapBackend::new(&tmp, plot.size).into_drawing_area();
+        let root = BitMapBackend::new(tmp, plot.size).into_drawing_area();
         root.fill(&WHITE).map_err(|e| plot_error(path, e))?;
         let mut chart = ChartBuilder::on(&root)
             .caption(&plot.title, ("sans-serif", 22))
@@ -229,11 +255,7 @@ pub fn loglog_png(path: &Path, plot: &LogLogPlot, series: &[Series]) -> Result<(
             .map_err(|e| plot_error(path, e))?;
         root.present().map_err(|e| plot_error(path, e))?;
     }
-    std::fs::rename(&tmp, path).map_err(|e| LbdemError::Write {
-        path: path.display().to_string(),
-        source: e,
-    })?;
-    crate::output::record_output(path)
+    Ok(())
 }
 
 /// Tick label of a log axis: plain decimals between 1e-3 and 1e4, scientific notation outside.

@@ -181,6 +181,10 @@ pub struct Units {
     pub inertia: &'static str,
     /// Pressure.
     pub pressure: &'static str,
+    /// Time (of `break_time`, and the `1/time` of `angular_velocity`).
+    pub time: &'static str,
+    /// Angular velocity.
+    pub angular_velocity: &'static str,
     /// From the world's numbers to these units ([`Scale::ONE`] from [`Units::of`]).
     pub scale: Scale,
 }
@@ -201,6 +205,26 @@ impl Units {
             torque,
             inertia,
             pressure: l.pressure,
+            time: l.time,
+            angular_velocity: "rad/s",
+            scale: Scale::ONE,
+        }
+    }
+
+    /// Lattice units (spacing h, step dt, reference density rho0 all 1; 2-D, per unit thickness), named as
+    /// such: for a world simulated and written in lattice units (`coupled_demo`), whose numbers are then not
+    /// in any physical system.
+    pub fn lattice() -> Self {
+        Units {
+            length: "h",
+            velocity: "h/dt",
+            mass: "rho0*h^2",
+            force: "rho0*h^3/dt^2",
+            torque: "rho0*h^4/dt^2",
+            inertia: "rho0*h^4",
+            pressure: "rho0*h^2/dt^2",
+            time: "dt",
+            angular_velocity: "rad/dt",
             scale: Scale::ONE,
         }
     }
@@ -500,7 +524,7 @@ pub fn particle_arrays<T: Real>(
         Array::new(
             "angular_velocity",
             1,
-            "rad/s",
+            units.angular_velocity,
             s1(&|i| f(p[i].angular_velocity) * rate),
         ),
         Array::new("orientation", 1, "rad", s1(&|i| f(p[i].angle))),
@@ -735,7 +759,7 @@ pub fn bond_arrays<T: Real>(w: &DemWorld<T>, clock: BreakClock, units: &Units) -
             ),
         ),
         Array::new("break_mode", 1, "", Values::U8(mode)),
-        Array::new("break_time", 1, "s", Values::F64(time)),
+        Array::new("break_time", 1, units.time, Values::F64(time)),
         Array::new("normal_force", 1, units.force, Values::F64(normal)),
         Array::new("shear_force", 1, units.force, Values::F64(shear)),
         Array::new("stretch", 1, units.length, Values::F64(stretch)),

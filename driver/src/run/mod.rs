@@ -28,7 +28,7 @@ use crate::output::{
     read_scene_copy, start_run_dir, write_atomic, CHECKPOINT_FILE, DIVERGED_FILE, SCENE_COPY,
     SUMMARY_FILE,
 };
-use crate::units::UnitSystem;
+use crate::units::{UnitLabels, UnitSystem};
 
 pub mod cases;
 pub mod checkpoint;
@@ -102,6 +102,11 @@ impl<K: Kind> Case<K> {
 pub trait SceneFile: Serialize + DeserializeOwned + Sync {
     /// `[scene] units`: the unit system of the scene's values (labels of the outputs).
     fn unit_system(&self) -> UnitSystem;
+    /// The labels of the units of the scene's values and outputs (`units` of the summary): those of
+    /// [`SceneFile::unit_system`], unless the scene is in lattice units ([`UnitLabels::LATTICE`]).
+    fn unit_labels(&self) -> UnitLabels {
+        self.unit_system().labels()
+    }
     /// `[run] checkpoint_interval`.
     fn checkpoint_interval(&self) -> CheckpointInterval;
 }
@@ -372,7 +377,7 @@ fn drive<K: Kind>(
                 kind: K::NAME,
                 scene_file: segment.path.to_string(),
                 scene: serde_json::to_value(&case.scene).unwrap_or_default(),
-                units: case.scene.unit_system().labels(),
+                units: case.scene.unit_labels(),
                 derived: serde_json::to_value(&case.setup).unwrap_or_default(),
                 warnings: case.setup.warnings().to_vec(),
                 execution: Execution::of(&opts.exec),

@@ -45,7 +45,7 @@ use crate::output::{csv, write_atomic};
 use crate::run::{Case, CheckpointInterval, Kind, OutputStage, Persist};
 use crate::scene::free_grain_defaults;
 use crate::scene::{CheckpointSection, SnapshotSection, UnitSystem};
-use crate::units::{CollisionName, Warnings, TAU_REFUSE_HIGH};
+use crate::units::{CollisionName, UnitLabels, Warnings, TAU_REFUSE_HIGH};
 
 /// `[scene]` of the demo (only `kind` and an optional name).
 #[derive(Clone, Debug, Deserialize, Serialize)]
@@ -100,8 +100,11 @@ pub struct DemoScene {
 
 impl crate::run::SceneFile for DemoScene {
     fn unit_system(&self) -> UnitSystem {
-        // Lattice units (h = Δt = ρ₀ = 1) are a consistent cgs-like system.
+        // The scene has no `units` key; its values are in lattice units, labelled as such by `unit_labels`.
         UnitSystem::Cgs
+    }
+    fn unit_labels(&self) -> UnitLabels {
+        UnitLabels::LATTICE
     }
     fn checkpoint_interval(&self) -> CheckpointInterval {
         self.run.checkpoint_interval
@@ -336,7 +339,7 @@ impl Kind for CoupledDemo {
 
     fn advance(case: &Case<Self>, state: &mut DemoState, dir: Option<&Path>) -> Result<()> {
         let d = &case.setup;
-        // Lattice units: the model time is the step count.
+        // Lattice units: the model time is the step count (unit dt).
         let every = case.scene.output.every(1.0, d.steps);
         let snapshot = |state: &mut DemoState, dir: &Path, every: u64| {
             let step = state.world.steps();
@@ -348,7 +351,7 @@ impl Kind for CoupledDemo {
                     .name
                     .clone()
                     .unwrap_or_else(|| "lbdem coupled_demo".into()),
-                units: Units::of(UnitSystem::Cgs),
+                units: Units::lattice(),
             };
             write_coupled(
                 dir,
