@@ -3,7 +3,9 @@
 Usage: python3 vtk_readback.py RUN_DIR
 
 Run by driver/tests/vtk_readback.rs on the run directories of tiny scenes of every kind that writes snapshots
-(fracture, dry, coupled_demo, terminal_velocity, consolidation, terzaghi; see docs/outputs.md). For every
+(fracture, dry, coupled_demo, terminal_velocity, consolidation, terzaghi, and the kinds whose grains are held
+fixed: pressure_diffusion, porous_flow and cylinder_array, the sweeps with one group of series per case,
+`particles_caseK.pvd`, `lattice_caseK.pvd`; see docs/outputs.md). For every
 `.pvd` collection: the listed files exist and are read by VTK's XML readers (the readers ParaView uses), times
 are finite and increasing and equal to each file's TIME field data; every array has its documented name,
 component count and tuple count (points or cells) and finite values, and every physical array names its unit.
@@ -12,7 +14,10 @@ series without bonds, no lattice without a fluid), recorded break times and mode
 broken_bonds.csv, the kinetic energy of the last grain snapshot against history.csv (fracture) or series.csv
 (coupled_demo, with the grain momentum), the disc's final velocity against summary.json (terminal_velocity),
 the grains on the t = 0 lattice, the lattice's centre-line pressure and maximum fluid speed of the last snapshot
-against centerline_pressure.csv and history.csv (fracture), and the shape tensor drawn by VTK's tensor glyph
+against centerline_pressure.csv and history.csv (fracture), grains held fixed at rest with mass -1, the t = 0
+lattice's covered area against the grains' (sum of eps h^2 = sum of pi a b f^2), the snapshot times against
+profiles.csv and the lattice's pressure against the initial overpressure (pressure_diffusion) or the imposed
+pressure drop at the Zou-He sides (porous_flow), and the shape tensor drawn by VTK's tensor glyph
 filter (what ParaView's Tensor Glyph runs) against the true ellipse of a few grains. Exits non-zero with a message on the
 first failure; prints one line per checked file otherwise.
 """
@@ -181,16 +186,47 @@ def expectations(kind, summary):
     fail(f"no expectations for kind {kind}")
 
 
+def groups(kind, summary):
+    """The snapshot groups of a run: (series suffix, grains, bonds or None, lattice nodes or None, grains held
+    fixed) for each: one group "" (particles.pvd, ...), or one per case of a sweep ("_caseK")."""
+    res = summary["results"]
+    if kind == "cylinder_array":
+        return [(f"_case{k}", 1, None, (c["case"]["cell"],) * 2, True) for k, c in enumerate(res["cases"])]
+    if kind == "porous_flow":
+        return [(f"_case{k}", c["discs"], None, tuple(c["size"]), True) for k, c in enumerate(res["cases"])]
+    if kind == "pressure_diffusion":
+        return [("", res["grains"], None, tuple(res["nodes"]), True)]
+    particles, bonds, nodes = expectations(kind, summary)
+    return [("", particles, bonds, nodes, False)]
+
+
+def fluid_radius(kind, summary):
+    scene = summary["scene"]
+    for section in ("fluid", "consolidation", "terzaghi", "pressure_diffusion"):
+        if kind in ("fracture", section) and "fluid_radius" in scene.get(section, {}):
+            return scene[section]["fluid_radius"]
+    return 1.0
+
+
 def main(run):
     summary = json.load(open(os.path.join(run, "summary.json")))
     kind = summary["kind"]
+    found = groups(kind, summary)
+    sweep = found[0][0] != ""
+    check(os.path.exists(os.path.join(run, "particles.pvd")) != sweep, f"{run}: particles.pvd of a sweep, or none")
+    check(not os.path.exists(os.path.join(run, f"particles_case{len(found)}.pvd")), f"{run}: more groups than cases")
+    for suffix, particles, bonds_total, nodes, fixed in found:
+        check_group(run, kind, summary, suffix, particles, bonds_total, nodes, fixed)
+    print(f"vtk_readback: OK {run} ({kind})")
+
+
+def check_group(run, kind, summary, suffix, particles, bonds_total, nodes, fixed):
     res = summary["results"]
     fracture = kind == "fracture"
-    particles, bonds_total, nodes = expectations(kind, summary)
     coupled = nodes is not None
 
     # Grains.
-    snaps = collection(run, "particles")
+    snaps = collection(run, "particles" + suffix)
     expected = dict(PARTICLE_ARRAYS, **(PARTICLE_FLUID_ARRAYS if coupled else {}))
     for t, path, obj, units in snaps:
         check(obj.GetNumberOfPoints() == particles, f"{path}: {obj.GetNumberOfPoints()} grains, summary.json says {particles}")
@@ -200,7 +236,18 @@ def main(run):
         v = arr(pd, "velocity")
         check(np.allclose(arr(pd, "speed"), np.hypot(v[:, 0], v[:, 1]), rtol=1e-12, atol=0), f"{path}: speed is not |velocity|")
         check(np.array_equal(arr(pd, "id"), np.arange(particles)), f"{path}: ids are not 0..n-1")
+        if fixed:
+            for name, want in [("velocity", 0.0), ("mass", -1.0), ("moment_of_inertia", -1.0), ("contact_count", 0)]:
+                check(np.all(arr(pd, name) == want), f"{path}: {name} of grains held fixed is not {want}")
         print(f"vtk_readback: {os.path.basename(path)}: {particles} grains, {len(expected)} arrays, t = {t:g} s")
+    if kind == "pressure_diffusion":
+        # Snapshot 0 before the drainage, then one at each profile of profiles.csv, at step x dt.
+        header, rows = read_csv(os.path.join(run, "profiles.csv"))
+        steps = sorted({float(r[header.index("step")]) for r in rows})
+        dt = summary["derived"]["units"]["timestep"]
+        want = [0.0] + [k * dt for k in steps]
+        check([t for t, _, _, _ in snaps] == want, f"snapshot times {[t for t, _, _, _ in snaps]}, profiles.csv {want}")
+        print(f"vtk_readback: snapshot times = 0 and the {len(steps)} profile times of profiles.csv")
     t_last, path, grains, _ = snaps[-1]
     check_glyphs(path, grains)
     if fracture:
@@ -239,7 +286,7 @@ def main(run):
     if bonds_total is None:
         check(not os.path.exists(os.path.join(run, "bonds.pvd")), f"{run}: a bond series without bonds")
         bonds_total = 0
-    snaps = collection(run, "bonds") if bonds_total else []
+    snaps = collection(run, "bonds" + suffix) if bonds_total else []
     for t, path, obj, units in snaps:
         check(obj.GetNumberOfLines() == bonds_total, f"{path}: {obj.GetNumberOfLines()} bond lines, summary.json says {bonds_total}")
         check(obj.GetNumberOfPoints() == particles, f"{path}: {obj.GetNumberOfPoints()} points")
@@ -257,7 +304,7 @@ def main(run):
             k += 1
         print(f"vtk_readback: {os.path.basename(path)}: {bonds_total} bonds ({int(np.sum(intact == 0))} broken), t = {t:g} s")
     if not snaps:
-        finish_lattice(run, kind, res, nodes, coupled, fracture)
+        finish_lattice(run, kind, summary, suffix, nodes, coupled, fracture)
         return
     t, path, obj, _ = snaps[-1]
     cd = obj.GetCellData()
@@ -276,15 +323,15 @@ def main(run):
         # The CSV prints 10 significant digits.
         check(ma == mb and abs(ta - tb) <= 1e-9 * max(abs(tb), 1e-12), f"{path}: break ({ta}, {ma}) vs table ({tb}, {mb})")
     print(f"vtk_readback: {len(ours)} recorded breaks: times and modes equal the break table")
-    finish_lattice(run, kind, res, nodes, coupled, fracture)
+    finish_lattice(run, kind, summary, suffix, nodes, coupled, fracture)
 
 
-def finish_lattice(run, kind, res, nodes, coupled, fracture):
-    """The lattice series (coupled runs), then the closing line."""
+def finish_lattice(run, kind, summary, suffix, nodes, coupled, fracture):
+    """The lattice series (coupled runs)."""
     if not coupled:
         check(not os.path.exists(os.path.join(run, "lattice.pvd")), f"{run}: a lattice series without a fluid")
     else:
-        snaps = collection(run, "lattice")
+        snaps = collection(run, "lattice" + suffix)
         nx, ny = nodes
         for t, path, obj, units in snaps:
             dims = obj.GetDimensions()
@@ -298,6 +345,40 @@ def finish_lattice(run, kind, res, nodes, coupled, fracture):
             # The grains are on the lattice in every snapshot, the first (t = 0, mapped before it) too.
             check(np.any(eps > 0), f"{path}: no grain on the lattice")
             print(f"vtk_readback: {os.path.basename(path)}: {nx} x {ny} nodes, t = {t:g} s")
+        # t = 0: the grains as the fluid sees them cover their area (eq. 4.4's exact cell areas; the grains lie
+        # inside the lattice): sum of eps h^2 = sum of pi a b f^2, f the fluid radius.
+        t0, path, obj, _ = snaps[0]
+        h = obj.GetSpacing()[0]
+        grains = collection(run, "particles" + suffix)[0][2]
+        axes = arr(grains.GetPointData(), "semi_axes")
+        f = fluid_radius(kind, summary)
+        area = float(np.sum(np.pi * axes[:, 0] * axes[:, 1])) * f * f
+        covered = float(np.sum(arr(obj.GetPointData(), "solid_fraction").astype(float))) * h * h
+        # eps stored as float32: 2^-24 relative each, summed.
+        check(t0 == 0.0 and abs(covered - area) <= 1e-6 * area, f"{path}: covered area {covered}, the grains' {area}")
+        print(f"vtk_readback: the t = 0 lattice covers the grains' area {area:.6e}")
+        if kind in ("porous_flow", "pressure_diffusion"):
+            pd = obj.GetPointData()
+            p = arr(pd, "pressure").astype(float).reshape(ny, nx)
+            kinds = arr(pd, "node_kind").reshape(ny, nx)
+            scene = summary["scene"]
+            if kind == "porous_flow":
+                # Case k runs pressure drop k mod m: the west Zou-He side holds it, the east one 0 (the reference).
+                drops = scene["porous"]["pressure_drops"]
+                dp = drops[int(suffix[len("_case"):]) % len(drops)]
+                west, east = p[:, 0], p[:, -1]
+            else:
+                # Before the drainage: the initial overpressure at the free fluid nodes inside, 0 on the drained
+                # Zou-He faces. The columns next to the faces are left out: the file's density is the one the next
+                # collision sees, after streaming, so 1/6 of theirs comes from the face (docs/outputs.md).
+                dp = scene["pressure_diffusion"]["overpressure"]
+                inner = kinds[:, 2:-2] == 0
+                west, east = p[:, 2:-2][inner], np.concatenate([p[:, 0], p[:, -1]])
+                check(np.all(kinds[:, 0] == 3) and np.all(kinds[:, -1] == 3), f"{path}: the faces are not Zou-He nodes")
+            # float32 pressures: 2^-24 relative; the drained side's 0 up to the roundoff of rho - 1 (1e-12 of dp).
+            check(np.all(np.abs(west - dp) <= 1e-6 * dp) and np.all(np.abs(east) <= 1e-6 * dp),
+                  f"{path}: pressures {west.min()}..{west.max()} and {east.min()}..{east.max()}, expected {dp} and 0")
+            print(f"vtk_readback: the lattice's pressure holds {dp} and 0 where the scene imposes them")
     if coupled and fracture:
         t, path, obj, _ = snaps[-1]
         pd = obj.GetPointData()
@@ -332,7 +413,6 @@ def finish_lattice(run, kind, res, nodes, coupled, fracture):
         err = float(np.max(np.abs(line[ok] - table[ok])))
         check(err <= 1e-6 * scale, f"{path}: centre-line pressure differs from centerline_pressure.csv by {err} (scale {scale})")
         print(f"vtk_readback: centre-line pressure and max fluid speed of the last lattice snapshot match the tables (max diff {err:.2e})")
-    print(f"vtk_readback: OK {run} ({kind})")
 
 
 if __name__ == "__main__":

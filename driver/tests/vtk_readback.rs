@@ -118,7 +118,31 @@ fn runs() -> &'static [(&'static str, PathBuf)] {
                 ("record_interval = 0.25 ", "record_interval = 0.1 "),
             ],
         );
+        // The kinds whose grains are held fixed in the fluid: the tiny scenes of `every_kind.rs` (two cases of a
+        // sweep each; the drainage's two profiles).
+        let cylinder_array = "[scene]\nkind = \"cylinder_array\"\nunits = \"cgs\"\n[fluid]\ndensity = 1.0\n\
+                              viscosity = 0.1\nspacing = 0.01\ntau = 0.8\n[cylinder_array]\ncell = 0.16\n\
+                              solid_fractions = [0.2, 0.4]\nacceleration = 0.5\n[run]\nsteps = 400\n\
+                              steady_tolerance = 1e-14\ncheck_interval = 100\n";
+        let porous_flow = "[scene]\nkind = \"porous_flow\"\nunits = \"cgs\"\n[fluid]\ndensity = 1.0\n\
+                           viscosity = 0.1\nspacing = 0.01\ntau = 0.8\n[porous]\ncolumns = 4\nrows = 1\n\
+                           pitch = 0.1\ndiameters = [0.06]\npressure_drops = [0.005, 0.01]\n[run]\nsteps = 300\n\
+                           steady_tolerance = 1e-14\ncheck_interval = 100\n";
+        let diffusion = edit(
+            &bundled("pressure_diffusion.toml"),
+            &[
+                ("width = 2.4 ", "width = 1.0 "),
+                ("height = 0.8 ", "height = 0.5 "),
+                (
+                    "fourier_times = [0.05, 0.1, 0.2, 0.35, 0.6, 1.0, 1.6]",
+                    "fourier_times = [0.05, 0.2]",
+                ),
+            ],
+        );
         vec![
+            ("cylinder_array", run("cylinder_array", cylinder_array)),
+            ("porous_flow", run("porous_flow", porous_flow)),
+            ("pressure_diffusion", run("pressure_diffusion", &diffusion)),
             ("fracture", run("fracture", &fracture)),
             ("dry", run("dry", &dry)),
             ("coupled_demo", run("coupled_demo", demo)),
@@ -226,6 +250,8 @@ struct Expect {
     nodes: Option<[usize; 2]>,
     /// Fraction of each grain's size the fluid sees.
     fluid_radius: f64,
+    /// Grains held fixed in the fluid (mass −1, at rest, no contact).
+    fixed: bool,
 }
 
 fn expect(kind: &str, s: &serde_json::Value) -> Expect {
@@ -238,24 +264,28 @@ fn expect(kind: &str, s: &serde_json::Value) -> Expect {
             bonds: Some(n(&r["total_bonds"])),
             nodes: nodes(&r["fluid"]["nodes"]),
             fluid_radius: sc["fluid"]["fluid_radius"].as_f64().unwrap(),
+            fixed: false,
         },
         "dry" => Expect {
             grains: n(&r["particles"]),
             bonds: Some(n(&r["bonds"])),
             nodes: None,
             fluid_radius: 1.0,
+            fixed: false,
         },
         "coupled_demo" => Expect {
             grains: n(&sc["demo"]["discs"]),
             bonds: None,
             nodes: Some([n(&sc["demo"]["nx"]), n(&sc["demo"]["ny"])]),
             fluid_radius: 1.0,
+            fixed: false,
         },
         "terminal_velocity" => Expect {
             grains: 1,
             bonds: None,
             nodes: Some([n(&r["cell"]); 2]),
             fluid_radius: 1.0,
+            fixed: false,
         },
         // A hexagonal pack of `columns` × `rows` grains.
         "consolidation" => Expect {
@@ -263,14 +293,65 @@ fn expect(kind: &str, s: &serde_json::Value) -> Expect {
             bonds: None,
             nodes: nodes(&r["nodes"]),
             fluid_radius: sc["consolidation"]["fluid_radius"].as_f64().unwrap(),
+            fixed: false,
         },
         "terzaghi" => Expect {
             grains: n(&r["grains"]),
             bonds: None,
             nodes: nodes(&r["nodes"]),
             fluid_radius: sc["terzaghi"]["fluid_radius"].as_f64().unwrap(),
+            fixed: false,
+        },
+        "pressure_diffusion" => Expect {
+            grains: n(&r["grains"]),
+            bonds: None,
+            nodes: nodes(&r["nodes"]),
+            fluid_radius: sc["pressure_diffusion"]["fluid_radius"].as_f64().unwrap(),
+            fixed: true,
         },
         other => panic!("no expectations for kind {other}"),
+    }
+}
+
+/// The snapshot groups of a run: `""` (`particles.pvd`, ...), or one per case of a sweep (`"_case0"`, ...:
+/// `particles_case0.pvd`, ...) with what case k must have written, from `summary.json`.
+fn groups(kind: &str, s: &serde_json::Value) -> Vec<(String, Expect)> {
+    let n = |v: &serde_json::Value| v.as_u64().unwrap() as usize;
+    let cases = s["results"]["cases"].as_array();
+    match kind {
+        // One disc in a periodic cell of `cell` nodes.
+        "cylinder_array" => cases
+            .unwrap()
+            .iter()
+            .enumerate()
+            .map(|(k, c)| {
+                let cell = n(&c["case"]["cell"]);
+                let e = Expect {
+                    grains: 1,
+                    bonds: None,
+                    nodes: Some([cell, cell]),
+                    fluid_radius: 1.0,
+                    fixed: true,
+                };
+                (format!("_case{k}"), e)
+            })
+            .collect(),
+        "porous_flow" => cases
+            .unwrap()
+            .iter()
+            .enumerate()
+            .map(|(k, c)| {
+                let e = Expect {
+                    grains: n(&c["discs"]),
+                    bonds: None,
+                    nodes: Some([n(&c["size"][0]), n(&c["size"][1])]),
+                    fluid_radius: 1.0,
+                    fixed: true,
+                };
+                (format!("_case{k}"), e)
+            })
+            .collect(),
+        _ => vec![(String::new(), expect(kind, s))],
     }
 }
 
@@ -284,11 +365,33 @@ fn every_output_parses_and_agrees_with_the_tables() {
         let s: serde_json::Value =
             serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap())
                 .unwrap();
-        let r = &s["results"];
-        let e = expect(kind, &s);
+        let groups = groups(kind, &s);
+        assert!(!groups.is_empty(), "{kind}: no snapshot group");
+        if groups[0].0.is_empty() {
+            assert!(dir.join("particles.pvd").exists(), "{kind}: particles.pvd");
+        } else {
+            // A sweep writes one group per case and no other.
+            assert!(!dir.join("particles.pvd").exists(), "{kind}: particles.pvd");
+            let k = groups.len();
+            assert!(
+                !dir.join(format!("particles_case{k}.pvd")).exists(),
+                "{kind}: a group beyond the {k} cases"
+            );
+        }
+        for (suffix, e) in &groups {
+            check_group(kind, dir, &s, suffix, e);
+        }
+    }
+}
+
+/// Every check of one snapshot group (`suffix`, see [`groups`]) of the run of `kind` in `dir`.
+fn check_group(kind: &str, dir: &Path, s: &serde_json::Value, suffix: &str, e: &Expect) {
+    let r = &s["results"];
+    let kind = &kind;
+    {
         let particles = e.grains;
         let coupled = e.nodes.is_some();
-        let grains = series(dir, "particles");
+        let grains = series(dir, &format!("particles{suffix}"));
         if *kind == "dry" {
             assert_eq!(grains.len() as u64, r["vtk_snapshots"].as_u64().unwrap());
         }
@@ -319,6 +422,25 @@ fn every_output_parses_and_agrees_with_the_tables() {
             let got: Vec<&str> = v.point_data.iter().map(|a| a.name.as_str()).collect();
             assert_eq!(got, names, "{file}");
             finite_and_sized(&file, &v.point_data, particles, v);
+        }
+        if e.fixed {
+            // Grains held fixed: at rest, mass and moment of inertia −1 (held: +∞), no contact, no bond.
+            for (t, v) in &grains {
+                for (name, want) in [
+                    ("velocity", 0.0),
+                    ("angular_velocity", 0.0),
+                    ("mass", -1.0),
+                    ("moment_of_inertia", -1.0),
+                    ("contact_force", 0.0),
+                    ("contact_count", 0.0),
+                    ("bonds", 0.0),
+                ] {
+                    assert!(
+                        v.point(name).unwrap().values.iter().all(|&x| x == want),
+                        "{kind}{suffix} at {t}: {name} of grains held fixed"
+                    );
+                }
+            }
         }
         // The fluid pushes the grains in a coupled run: fluid forces are not all zero at the end; before the
         // first coupled step no fluid has acted yet.
@@ -464,6 +586,48 @@ fn every_output_parses_and_agrees_with_the_tables() {
                 );
             }
         }
+        let derived = &s["derived"]["units"];
+        let dt = derived["timestep"].as_f64().unwrap_or(f64::NAN);
+        if *kind == "cylinder_array" {
+            let k: usize = suffix.trim_start_matches("_case").parse().unwrap();
+            let c = &r["cases"][k];
+            // The last snapshot is the case's end, at its steps × Δt (the writer's product, exactly).
+            assert_eq!(*t_last, c["steps"].as_f64().unwrap() * dt, "{kind}{suffix}");
+            // The fluid's force on the disc: the PSM force the summary reports as solid_force_ratio × G l²
+            // (lattice units), in dyne per unit thickness (× ρ₀ h³/Δt²).
+            let (h, rho) = (
+                derived["spacing"].as_f64().unwrap(),
+                derived["density"].as_f64().unwrap(),
+            );
+            let l = c["case"]["cell"].as_f64().unwrap();
+            let want = c["solid_force_ratio"].as_f64().unwrap()
+                * c["case"]["force"].as_f64().unwrap()
+                * l
+                * l
+                * rho
+                * h.powi(3)
+                / (dt * dt);
+            let got = g.point("fluid_force").unwrap().values[0];
+            // The same lattice force through other products (and the ratio's division): a few ulps.
+            assert!(
+                (got - want).abs() <= 1e-12 * want.abs(),
+                "{kind}{suffix}: fluid force on the disc {got} vs summary {want}"
+            );
+        }
+        if *kind == "pressure_diffusion" {
+            // One snapshot before the drainage, then one at each profile of profiles.csv, at step × Δt.
+            let table = csv(&dir.join("profiles.csv"));
+            let mut steps: Vec<f64> = column(&table, "step")
+                .iter()
+                .map(|x| x.parse().unwrap())
+                .collect();
+            steps.dedup();
+            let want: Vec<f64> = std::iter::once(0.0)
+                .chain(steps.iter().map(|k| k * dt))
+                .collect();
+            let got: Vec<f64> = grains.iter().map(|(t, _)| *t).collect();
+            assert_eq!(got, want, "{kind}: snapshot times vs profiles.csv");
+        }
         if *kind == "terminal_velocity" {
             // The disc's final velocity, converted from lattice units by the writer: the summary's.
             let want = r["disc_velocity_physical"].as_f64().unwrap();
@@ -479,11 +643,11 @@ fn every_output_parses_and_agrees_with_the_tables() {
                 !dir.join("lattice.pvd").exists(),
                 "{kind}: a lattice without a fluid"
             );
-            continue;
+            return;
         };
         // The lattice: the summary's size, every array finite, ε in [0, 1], the grains on it in every
         // snapshot (at t = 0 too: they are mapped before it is written).
-        let lattice = series(dir, "lattice");
+        let lattice = series(dir, &format!("lattice{suffix}"));
         assert_eq!(lattice.len(), grains.len(), "{kind}");
         for (t, v) in &lattice {
             let file = format!("{kind} lattice at {t}");

@@ -10,12 +10,17 @@ use std::path::Path;
 
 use serde::{Deserialize, Serialize};
 
+use lbdem_kernels::dem::shape::Particle;
+use lbdem_kernels::Real;
+
 use super::pvd::write_snapshot;
 use super::vtk::{
-    bonds_vtp, lattice_field, lattice_vti, particles_vtp, BreakClock, LatticeFrame, Stamp,
+    bonds_vtp, fixed_particles_vtp, lattice_field, lattice_vti, particles_vtp, BreakClock,
+    LatticeFrame, Stamp,
 };
 use crate::engine::coupled::CoupledWorld;
 use crate::engine::dem::DemWorld;
+use crate::engine::lattice::{FluidDisc, FluidLattice};
 use crate::error::Result;
 use crate::units::{LatticeUnits, UnitSystem};
 
@@ -80,7 +85,7 @@ pub fn chunk_with_snapshots<S>(
 
 /// Snapshot `index` of every series of a run: `particles` (with the fluid's loads on the grains when given),
 /// `bonds` (when the world has bonds) and `lattice` (when given), all at `stamp.time`.
-pub fn write_series<T: lbdem_kernels::Real>(
+pub fn write_series<T: Real>(
     dir: &Path,
     index: usize,
     stamp: &Stamp,
@@ -161,4 +166,107 @@ pub fn write_coupled_at_step(
     let stamp = Stamp::titled(step as f64 * units.timestep, name, kind, system);
     let frame = LatticeFrame::of(units, world.map.origin, 1.0);
     write_coupled(dir, clock, every, step, &stamp, world, &frame)
+}
+
+/// Where and how a kind whose grains are held fixed in the fluid (`pressure_diffusion`, `porous_flow`,
+/// `cylinder_array`) writes its snapshots ([`write_fixed`]): the run directory, the suffix of its series' names
+/// (`""`: `particles.pvd`, `lattice.pvd`; `"_case3"`: `particles_case3.pvd`, … for case 3 of a sweep), the
+/// title and unit system of the stamp, and the scene's lattice units (to turn the fluid's loads into them).
+#[derive(Clone, Debug)]
+pub struct FixedSnapshots<'a> {
+    /// The run directory.
+    pub dir: &'a Path,
+    /// Appended to each series' name.
+    pub suffix: String,
+    /// The scene's name (`lbdem KIND` without one).
+    pub name: Option<&'a str>,
+    /// The kind.
+    pub kind: &'a str,
+    /// The scene's unit system (the labels).
+    pub system: UnitSystem,
+    /// The scene's lattice units.
+    pub units: LatticeUnits,
+}
+
+impl<'a> FixedSnapshots<'a> {
+    /// The snapshots of a run in `dir` of a scene of `kind` named `name`, in `system` and `units`.
+    pub fn new(
+        dir: &'a Path,
+        (name, kind, system): (Option<&'a str>, &'a str, UnitSystem),
+        units: LatticeUnits,
+    ) -> Self {
+        FixedSnapshots {
+            dir,
+            suffix: String::new(),
+            name,
+            kind,
+            system,
+            units,
+        }
+    }
+
+    /// The series of case `k` of a sweep (`particles_caseK.pvd`, `lattice_caseK.pvd`; K from 0, the row of the
+    /// kind's table).
+    pub fn case(&self, k: usize) -> Self {
+        FixedSnapshots {
+            suffix: format!("_case{k}"),
+            ..self.clone()
+        }
+    }
+}
+
+/// Snapshot `index` at model time `time` of `grains` held fixed (physical units; the velocities they hold) in
+/// `lattice`, whose nodes lie as `frame` says: the grains with the fluid's force and torque on each of them from
+/// the lattice's last step (0 before the first; [`FluidLattice::solid_forces_and_torques`], body k being grain
+/// k, torques about the grains' centres) in the scene's units, and the lattice. Each file is written atomically
+/// and recorded in its collection, as [`write_series`] does.
+pub fn write_fixed<T: Real>(
+    at: &FixedSnapshots,
+    index: usize,
+    time: f64,
+    grains: &[Particle<f64>],
+    lattice: &FluidLattice<T>,
+    frame: &LatticeFrame,
+) -> Result<()> {
+    let stamp = Stamp::titled(time, at.name, at.kind, at.system);
+    // The grains' centres in lattice coordinates (the inverse of the frame's node positions).
+    let centers: Vec<_> = grains
+        .iter()
+        .map(|p| {
+            lbdem_kernels::math::vector(
+                (p.position[0] - frame.origin[0]) / frame.spacing,
+                (p.position[1] - frame.origin[1]) / frame.spacing,
+            )
+        })
+        .collect();
+    let (forces, torques) = lattice.solid_forces_and_torques(&centers);
+    let u = &at.units;
+    let fluid: Vec<([f64; 2], f64)> = forces
+        .iter()
+        .zip(&torques)
+        .map(|(f, &t)| {
+            (
+                [u.force_to_physical(f[0]), u.force_to_physical(f[1])],
+                u.force_to_physical(t) * u.spacing,
+            )
+        })
+        .collect();
+    let bytes = fixed_particles_vtp(&stamp, grains, Some(&fluid));
+    let particles = format!("particles{}", at.suffix);
+    write_snapshot(at.dir, &particles, index, time, "vtp", &bytes)?;
+    let field = lattice_field(lattice, frame);
+    let bytes = lattice_vti(&stamp, &field);
+    let series = format!("lattice{}", at.suffix);
+    write_snapshot(at.dir, &series, index, time, "vti", &bytes)
+}
+
+/// A disc of the fluid lattice (lattice units) as a grain held fixed for [`write_fixed`]: centre and radius in
+/// physical units (node (0, 0) at the origin, spacing `spacing`), at rest. Its mass is never written (a grain
+/// held fixed has mass −1 in the files), so its density is a placeholder.
+pub fn disc_grain(disc: &FluidDisc, spacing: f64) -> Particle<f64> {
+    Particle::disc(
+        lbdem_kernels::math::vector(disc.center[0] * spacing, disc.center[1] * spacing),
+        disc.radius * spacing,
+        1.0,
+    )
 }

@@ -16,6 +16,7 @@ use std::collections::HashMap;
 use std::fmt::Write;
 
 use lbdem_kernels::dem::bond::BreakMode;
+use lbdem_kernels::dem::shape::Particle;
 use lbdem_kernels::fluid::step::SOLID;
 use lbdem_kernels::Real;
 
@@ -442,6 +443,59 @@ pub fn particle_arrays<T: Real>(
     units: &Units,
 ) -> Vec<Array> {
     let f = |x: T| x.to_f64_exact();
+    let force_s = units.scale.force();
+    let n = w.particles.len();
+    // The contact forces of the last step; before the first step in this process (at the start of a run, or
+    // right after a resume: they are not checkpointed) those the next step will apply, from a copy of the world
+    // stepped once (the copy is dropped; the world is not touched).
+    let loads = |w: &DemWorld<T>| w.contact_loads().zip(w.wall_contact_loads());
+    let ((gf, gc), (wf, wc)) = loads(w).unwrap_or_else(|| {
+        let mut probe = w.clone();
+        probe.step();
+        loads(&probe).expect("a stepped world knows its contact loads")
+    });
+    let to = |v: &[T; 2]| [f(v[0]) * force_s, f(v[1]) * force_s];
+    let grain_force: Vec<[f64; 2]> = gf.iter().map(to).collect();
+    let wall_force: Vec<[f64; 2]> = wf.iter().map(to).collect();
+    let contact_count: Vec<u32> = gc.iter().zip(&wc).map(|(a, b)| a + b).collect();
+    let broken = w.broken_bond_fraction();
+    let mut bonds = vec![0i64; n];
+    for b in &w.bonds {
+        for &i in &b.pair {
+            bonds[i] += 1;
+        }
+    }
+    let loads = Loads {
+        grain_force,
+        wall_force,
+        contact_count,
+        bonds,
+        broken,
+        held: false,
+    };
+    grain_arrays(&w.particles, &loads, fluid, units)
+}
+
+/// What [`grain_arrays`] writes besides the particles themselves: the contact loads (in the labelled units),
+/// the bonds of each grain, and whether the grains are held fixed.
+struct Loads {
+    grain_force: Vec<[f64; 2]>,
+    wall_force: Vec<[f64; 2]>,
+    contact_count: Vec<u32>,
+    bonds: Vec<i64>,
+    broken: Vec<f64>,
+    /// Held fixed (not a DEM world: mass and moment of inertia written as −1, i.e. +∞).
+    held: bool,
+}
+
+/// The arrays of grains `p` with their `loads` and the fluid's loads `fluid`.
+fn grain_arrays<T: Real>(
+    p: &[Particle<T>],
+    loads: &Loads,
+    fluid: Option<&[([f64; 2], f64)]>,
+    units: &Units,
+) -> Vec<Array> {
+    let f = |x: T| x.to_f64_exact();
     let sc = units.scale;
     let (len, vel, rate, mass_s, force_s, torque_s, inertia_s) = (
         sc.length,
@@ -452,8 +506,9 @@ pub fn particle_arrays<T: Real>(
         sc.torque(),
         sc.inertia(),
     );
-    let p = &w.particles;
     let n = p.len();
+    let (grain_force, wall_force, contact_count) =
+        (&loads.grain_force, &loads.wall_force, &loads.contact_count);
     let v3 = |g: &dyn Fn(usize) -> [f64; 2]| -> Values {
         Values::F64(
             (0..n)
@@ -476,26 +531,6 @@ pub fn particle_arrays<T: Real>(
         .iter()
         .map(|q| [f(q.velocity[0]) * vel, f(q.velocity[1]) * vel])
         .collect();
-    // The contact forces of the last step; before the first step in this process (at the start of a run, or
-    // right after a resume: they are not checkpointed) those the next step will apply, from a copy of the world
-    // stepped once (the copy is dropped; the world is not touched).
-    let loads = |w: &DemWorld<T>| w.contact_loads().zip(w.wall_contact_loads());
-    let ((gf, gc), (wf, wc)) = loads(w).unwrap_or_else(|| {
-        let mut probe = w.clone();
-        probe.step();
-        loads(&probe).expect("a stepped world knows its contact loads")
-    });
-    let to = |v: &[T; 2]| [f(v[0]) * force_s, f(v[1]) * force_s];
-    let grain_force: Vec<[f64; 2]> = gf.iter().map(to).collect();
-    let wall_force: Vec<[f64; 2]> = wf.iter().map(to).collect();
-    let contact_count: Vec<u32> = gc.iter().zip(&wc).map(|(a, b)| a + b).collect();
-    let broken = w.broken_bond_fraction();
-    let mut bonds = vec![0i64; n];
-    for b in &w.bonds {
-        for &i in &b.pair {
-            bonds[i] += 1;
-        }
-    }
     // The glyph shape tensor R diag(2a, 2b, 2b) Rᵀ (R: rotation by the orientation θ): ParaView's Tensor Glyph
     // with its default unit-diameter sphere and scale factor 1 draws the true ellipse (semi-axes a, b); the
     // out-of-plane axis 2b makes it an ellipsoid whose outline seen along z is the grain.
@@ -553,15 +588,27 @@ pub fn particle_arrays<T: Real>(
                     .collect(),
             ),
         ),
-        Array::new("mass", 1, units.mass, s1(&|i| f(p[i].mass) * mass_s)),
-        // +∞ (rotation locked) is written as −1: the files hold finite numbers only.
+        // Held fixed: m = +∞, written as −1 (the files hold finite numbers only).
+        Array::new(
+            "mass",
+            1,
+            units.mass,
+            s1(&|i| {
+                if loads.held {
+                    -1.0
+                } else {
+                    f(p[i].mass) * mass_s
+                }
+            }),
+        ),
+        // +∞ (rotation locked, or the grain held fixed) is written as −1.
         Array::new(
             "moment_of_inertia",
             1,
             units.inertia,
             s1(&|i| {
                 let j = f(p[i].moment_of_inertia);
-                if j.is_finite() {
+                if j.is_finite() && !loads.held {
                     j * inertia_s
                 } else {
                     -1.0
@@ -588,8 +635,13 @@ pub fn particle_arrays<T: Real>(
             "",
             Values::I64(contact_count.iter().map(|&c| c as i64).collect()),
         ),
-        Array::new("bonds", 1, "", Values::I64(bonds)),
-        Array::new("broken_bond_fraction", 1, "1", Values::F64(broken)),
+        Array::new("bonds", 1, "", Values::I64(loads.bonds.clone())),
+        Array::new(
+            "broken_bond_fraction",
+            1,
+            "1",
+            Values::F64(loads.broken.clone()),
+        ),
     ];
     if let Some(fl) = fluid {
         out.push(Array::new(
@@ -609,9 +661,8 @@ pub fn particle_arrays<T: Real>(
 }
 
 /// The grains' centres in the stamp's length unit (the points of the particle and bond files).
-fn particle_points<T: Real>(stamp: &Stamp, w: &DemWorld<T>) -> Vec<[f64; 2]> {
-    w.particles
-        .iter()
+fn particle_points<T: Real>(stamp: &Stamp, p: &[Particle<T>]) -> Vec<[f64; 2]> {
+    p.iter()
         .map(|p| {
             [
                 p.position[0].to_f64_exact() * stamp.units.scale.length,
@@ -627,12 +678,50 @@ pub fn particles_vtp<T: Real>(
     w: &DemWorld<T>,
     fluid: Option<&[([f64; 2], f64)]>,
 ) -> Vec<u8> {
-    let points = particle_points(stamp, w);
+    let points = particle_points(stamp, &w.particles);
     polydata(
         stamp,
         &points,
         None,
         &particle_arrays(w, fluid, &stamp.units),
+        &[],
+    )
+}
+
+/// The arrays of grains `p` held fixed in a fluid (the fixed-solid kinds: `pressure_diffusion`, `porous_flow`,
+/// `cylinder_array`), the same arrays as [`particle_arrays`]: the velocities the particles hold (0 for grains
+/// held fixed), mass and moment of inertia −1 (held: +∞, as for a locked rotation), no contact load (the grains
+/// are no DEM world: no contact is computed), no bond; `fluid` as there.
+pub fn fixed_particle_arrays<T: Real>(
+    p: &[Particle<T>],
+    fluid: Option<&[([f64; 2], f64)]>,
+    units: &Units,
+) -> Vec<Array> {
+    let n = p.len();
+    let loads = Loads {
+        grain_force: vec![[0.0; 2]; n],
+        wall_force: vec![[0.0; 2]; n],
+        contact_count: vec![0; n],
+        bonds: vec![0; n],
+        broken: vec![0.0; n],
+        held: true,
+    };
+    grain_arrays(p, &loads, fluid, units)
+}
+
+/// Grains held fixed as a `.vtp` document: one vertex per grain at its centre, with [`fixed_particle_arrays`]
+/// as point data.
+pub fn fixed_particles_vtp<T: Real>(
+    stamp: &Stamp,
+    p: &[Particle<T>],
+    fluid: Option<&[([f64; 2], f64)]>,
+) -> Vec<u8> {
+    let points = particle_points(stamp, p);
+    polydata(
+        stamp,
+        &points,
+        None,
+        &fixed_particle_arrays(p, fluid, &stamp.units),
         &[],
     )
 }
@@ -770,7 +859,7 @@ pub fn bond_arrays<T: Real>(w: &DemWorld<T>, clock: BreakClock, units: &Units) -
 /// Every bond as a line between its two grain centres (`.vtp`), [`bond_arrays`] as cell data, the grain `id`
 /// as point data.
 pub fn bonds_vtp<T: Real>(stamp: &Stamp, w: &DemWorld<T>, clock: BreakClock) -> Vec<u8> {
-    let points = particle_points(stamp, w);
+    let points = particle_points(stamp, &w.particles);
     let pairs: Vec<[usize; 2]> = w.bonds.iter().map(|b| b.pair).collect();
     let ids = Array::new("id", 1, "", Values::I64((0..points.len() as i64).collect()));
     polydata(

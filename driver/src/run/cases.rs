@@ -13,6 +13,7 @@ use crate::engine::exec::Exec;
 use crate::engine::lattice::FluidLattice;
 use crate::error::Result;
 use crate::observe::health::fluid_health;
+use crate::output::snapshots::FixedSnapshots;
 
 /// What a diverging steady-flow case suggests (its health check, and its steady-state loop's divergence check).
 pub const DRIVE_HINT: &str =
@@ -51,6 +52,11 @@ pub trait CaseRun: Sized {
     /// Use this process's execution settings (after a resume).
     fn apply(&mut self, exec: &Exec) {
         exec.apply(self.lattice_mut());
+    }
+    /// Snapshot `index` of the case (0 at its start, 1 at its end): its grains held fixed and its lattice,
+    /// through [`crate::output::snapshots::write_fixed`] into the case's series of `at`. None by default.
+    fn snapshot(&self, _case: &Self::Case, _at: &FixedSnapshots, _index: usize) -> Result<()> {
+        Ok(())
     }
 }
 
@@ -110,16 +116,30 @@ impl<R: CaseRun> Cases<R> {
         self.done.len() >= cases
     }
 
-    /// One chunk of the next unfinished case of `cases` (starting it when needed).
-    pub fn advance(&mut self, cases: &[R::Case]) -> Result<()> {
-        let Some(case) = cases.get(self.done.len()) else {
+    /// One chunk of the next unfinished case of `cases` (starting it when needed). With `at` (a run with a
+    /// directory), each case's first snapshot is written when it starts and its last when it ends, in the
+    /// series of case k ([`FixedSnapshots::case`]): both in the same chunk as the state change, so a resumed
+    /// run writes the same files.
+    pub fn advance(&mut self, cases: &[R::Case], at: Option<&FixedSnapshots>) -> Result<()> {
+        let k = self.done.len();
+        let Some(case) = cases.get(k) else {
             return Ok(());
         };
+        let at = at.map(|a| a.case(k));
         let mut run = match self.current.take() {
             Some(r) => r,
-            None => R::start(case, &self.exec)?,
+            None => {
+                let r = R::start(case, &self.exec)?;
+                if let Some(a) = &at {
+                    r.snapshot(case, a, 0)?;
+                }
+                r
+            }
         };
         if run.advance(case)? {
+            if let Some(a) = &at {
+                run.snapshot(case, a, 1)?;
+            }
             let o = run.outcome(case);
             eprintln!("lbdem: {}", R::report(case, &o));
             self.done.push(o);
@@ -189,8 +209,8 @@ where
     }
 
     /// [`Cases::advance`].
-    pub fn advance(&mut self, cases: &[C]) -> Result<()> {
-        both!(self, c => c.advance(cases))
+    pub fn advance(&mut self, cases: &[C], at: Option<&FixedSnapshots>) -> Result<()> {
+        both!(self, c => c.advance(cases, at))
     }
 
     /// [`Cases::health`].
@@ -222,7 +242,9 @@ where
 
 /// The [`crate::run::Kind`] methods every sweep kind shares (`start`, `resume`, `steps_done`, `total_steps`,
 /// `finished`, `advance`, `health`), for a kind whose state is a [`Sweep`], whose set-up lists its cases as
-/// `cases` (each with its step limit `max_steps`) and whose scene has the `[scene]` header as `scene`.
+/// `cases` (each with its step limit `max_steps`) and its lattice units as `units`, and whose scene has the
+/// `[scene]` header as `scene`. `advance` writes each case's snapshots ([`CaseRun::snapshot`]) into the run
+/// directory.
 macro_rules! sweep_kind_methods {
     () => {
         fn start(
@@ -257,9 +279,17 @@ macro_rules! sweep_kind_methods {
         fn advance(
             case: &$crate::run::Case<Self>,
             state: &mut Self::State,
-            _dir: Option<&std::path::Path>,
+            dir: Option<&std::path::Path>,
         ) -> $crate::error::Result<()> {
-            state.advance(&case.setup.cases)
+            let h = &case.scene.scene;
+            let at = dir.map(|d| {
+                $crate::output::snapshots::FixedSnapshots::new(
+                    d,
+                    (h.name.as_deref(), Self::NAME, h.units),
+                    case.setup.units,
+                )
+            });
+            state.advance(&case.setup.cases, at.as_ref())
         }
 
         fn health(

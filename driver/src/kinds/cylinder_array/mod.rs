@@ -38,6 +38,8 @@ use crate::input::limits::{self, Budget};
 use crate::observe::darcy::SteadyFlow;
 use crate::observe::flow::max_mach;
 use crate::observe::steady::Steadiness;
+use crate::output::snapshots::{disc_grain, write_fixed, FixedSnapshots};
+use crate::output::vtk::LatticeFrame;
 use crate::output::{csv, write_atomic};
 use crate::run::cases::{solve, CaseRun, Sweep, DRIVE_HINT};
 use crate::run::{Case, Kind, OutputStage};
@@ -118,6 +120,17 @@ impl ArrayCase {
     /// Disc radius a = l √(c/π) (lattice units).
     pub fn radius(&self) -> f64 {
         self.cell as f64 * (self.solid_fraction / std::f64::consts::PI).sqrt()
+    }
+
+    /// The disc, at the centre of the cell (lattice units).
+    pub fn disc(&self) -> FluidDisc {
+        let mid = 0.5 * (self.cell as f64 - 1.0);
+        FluidDisc {
+            center: [mid, mid],
+            radius: self.radius(),
+            velocity: [0.0; 2],
+            spin: 0.0,
+        }
     }
 
     /// Nodes across the narrowest gap, l − 2a.
@@ -213,14 +226,7 @@ impl<T: Real> CaseRun for ArrayRun<T> {
         lattice.set_band_rows(l.div_ceil(2).max(1));
         lattice.set_collision(collision_of(case.collision)?)?;
         lattice.set_solid_operator(case.solid_operator);
-        let mid = 0.5 * (l as f64 - 1.0);
-        let disc = FluidDisc {
-            center: [mid, mid],
-            radius: case.radius(),
-            velocity: [0.0; 2],
-            spin: 0.0,
-        };
-        lattice.cover_with_discs(&[disc], case.solid_operator.weighting());
+        lattice.cover_with_discs(&[case.disc()], case.solid_operator.weighting());
         let eps = lattice.solid_fraction_map();
         let mass0 = lattice.mass();
         Ok(Self {
@@ -304,6 +310,14 @@ impl<T: Real> CaseRun for ArrayRun<T> {
 
     fn lattice_mut(&mut self) -> &mut FluidLattice<T> {
         &mut self.lattice
+    }
+
+    /// The disc and the cell (pressure 0 at the initial density 1; model time steps × Δt).
+    fn snapshot(&self, case: &ArrayCase, at: &FixedSnapshots, index: usize) -> Result<()> {
+        let grain = disc_grain(&case.disc(), at.units.spacing);
+        let frame = LatticeFrame::of(&at.units, [0.0; 2], 1.0);
+        let time = self.lattice.steps() as f64 * at.units.timestep;
+        write_fixed(at, index, time, &[grain], &self.lattice, &frame)
     }
 
     fn outcome_steps(o: &ArrayOutcome) -> u64 {

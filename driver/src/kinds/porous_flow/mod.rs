@@ -38,6 +38,8 @@ use crate::observe::darcy::{permeability, SteadyFlow};
 use crate::observe::fit::linear_fit;
 use crate::observe::flow::max_mach;
 use crate::observe::steady::Steadiness;
+use crate::output::snapshots::{disc_grain, write_fixed, FixedSnapshots};
+use crate::output::vtk::LatticeFrame;
 use crate::output::{csv, write_atomic};
 use crate::run::cases::{solve, CaseRun, Sweep, DRIVE_HINT};
 use crate::run::{Case, Kind, OutputStage};
@@ -401,6 +403,15 @@ impl<T: Real> CaseRun for PorousRun<T> {
 
     fn lattice_mut(&mut self) -> &mut FluidLattice<T> {
         &mut self.lattice
+    }
+
+    /// The discs and the slab (pressure 0 at the outlet density 1 − Δρ/2; model time steps × Δt).
+    fn snapshot(&self, case: &PorousCase, at: &FixedSnapshots, index: usize) -> Result<()> {
+        let h = at.units.spacing;
+        let grains: Vec<_> = case.discs().iter().map(|d| disc_grain(d, h)).collect();
+        let frame = LatticeFrame::of(&at.units, [0.0; 2], 1.0 - 0.5 * case.density_drop);
+        let time = self.lattice.steps() as f64 * at.units.timestep;
+        write_fixed(at, index, time, &grains, &self.lattice, &frame)
     }
 
     fn outcome_steps(o: &PorousOutcome) -> u64 {

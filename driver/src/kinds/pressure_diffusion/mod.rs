@@ -19,6 +19,7 @@
 use std::path::Path;
 
 use lbdem_kernels::coupling::{BodyShape, CoupledBody};
+use lbdem_kernels::dem::shape::Particle;
 use lbdem_kernels::fluid::boundary::{Boundaries, SideCondition};
 use lbdem_kernels::fluid::collide::SolidOperator;
 use lbdem_kernels::fluid::step::FluidParams;
@@ -34,6 +35,8 @@ use crate::observe::darcy::{permeability, SteadyFlow};
 use crate::observe::fit::fit_diffusivity;
 use crate::observe::health::fluid_health;
 use crate::observe::steady::Steadiness;
+use crate::output::snapshots::{write_fixed, FixedSnapshots};
+use crate::output::vtk::LatticeFrame;
 use crate::output::{csv, write_atomic};
 use crate::run::{run_in_memory, Case, Kind, OutputStage, Persist, RunOptions};
 use crate::scene::{CheckpointSection, SceneHeader, UnitsSetup};
@@ -183,6 +186,12 @@ pub struct DiffusionState {
     columns: Vec<(usize, Vec<usize>)>,
     raw: Vec<(u64, Vec<(f64, f64)>)>,
     step: u64,
+    /// The grains as the fluid holds them (fixed, at rest; physical units), for the snapshots.
+    solids: Vec<Particle<f64>>,
+    /// Physical position of lattice node (0, 0).
+    origin: [f64; 2],
+    /// Snapshots of the drainage written so far.
+    snapshots: usize,
 }
 
 impl Persist for DiffusionState {}
@@ -257,6 +266,17 @@ fn start(case: &Case<PressureDiffusion>, exec: &Exec) -> Result<DiffusionState> 
         }
     });
     let m0 = fluid.mass();
+    // The grains as the fluid holds them: fixed, at rest (the packing's settling velocities do not enter).
+    let solids = world
+        .particles
+        .iter()
+        .map(|p| {
+            let mut q = *p;
+            q.velocity = lbdem_kernels::math::Vector::zeros();
+            q.angular_velocity = 0.0;
+            q
+        })
+        .collect();
     Ok(DiffusionState {
         grains: world.particles.len(),
         nx,
@@ -274,6 +294,10 @@ fn start(case: &Case<PressureDiffusion>, exec: &Exec) -> Result<DiffusionState> 
         columns: Vec::new(),
         raw: Vec::new(),
         step: 0,
+        solids,
+        // Node (i, j) is at x = lo + i h, y = lo + (j + ½) h (the inverse of `map_x`, `map_y`).
+        origin: [lo[0], lo[1] + 0.5 * h],
+        snapshots: 0,
     })
 }
 
@@ -327,7 +351,22 @@ impl DiffusionState {
         self.darcy.is_none() && self.raw.len() >= self.times.len()
     }
 
-    fn advance(&mut self, case: &Case<PressureDiffusion>) -> Result<()> {
+    /// The next snapshot of the drainage: the grains (held fixed) and the lattice, pressure 0 at the faces'
+    /// density 1, at model time steps × Δt since the drainage began.
+    fn snapshot(&mut self, case: &Case<PressureDiffusion>, at: &FixedSnapshots) -> Result<()> {
+        let u = &case.setup.units;
+        let frame = LatticeFrame::of(u, self.origin, 1.0);
+        let time = self.step as f64 * u.timestep;
+        write_fixed(at, self.snapshots, time, &self.solids, &self.fluid, &frame)?;
+        self.snapshots += 1;
+        Ok(())
+    }
+
+    fn advance(
+        &mut self,
+        case: &Case<PressureDiffusion>,
+        at: Option<&FixedSnapshots>,
+    ) -> Result<()> {
         let (nx, ny) = (self.nx, self.ny);
         let nu = case.setup.units.lattice_viscosity;
         let two_l = (nx - 1) as f64;
@@ -389,6 +428,10 @@ impl DiffusionState {
         let Some(&target) = self.times.get(self.raw.len()) else {
             return Ok(());
         };
+        // Snapshot 0 before the first drainage step, then one at each profile (the last at the end).
+        if let Some(at) = at.filter(|_| self.snapshots == 0) {
+            self.snapshot(case, at)?;
+        }
         // Up to the next snapshot, at most 1000 steps at a time.
         let end = target.min((self.step / 1000 + 1) * 1000);
         while self.step < end {
@@ -407,6 +450,9 @@ impl DiffusionState {
                 })
                 .collect();
             self.raw.push((self.step, prof));
+            if let Some(at) = at {
+                self.snapshot(case, at)?;
+            }
         }
         Ok(())
     }
@@ -670,8 +716,16 @@ impl Kind for PressureDiffusion {
         state.finished()
     }
 
-    fn advance(case: &Case<Self>, state: &mut DiffusionState, _dir: Option<&Path>) -> Result<()> {
-        state.advance(case)
+    fn advance(case: &Case<Self>, state: &mut DiffusionState, dir: Option<&Path>) -> Result<()> {
+        let h = &case.scene.scene;
+        let at = dir.map(|d| {
+            FixedSnapshots::new(
+                d,
+                (h.name.as_deref(), Self::NAME, h.units),
+                case.setup.units,
+            )
+        });
+        state.advance(case, at.as_ref())
     }
 
     fn health(_case: &Case<Self>, state: &DiffusionState) -> Result<()> {
