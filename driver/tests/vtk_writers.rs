@@ -438,3 +438,89 @@ fn parser_refuses_damaged_files() {
     // Not a VTK XML file with appended data.
     assert!(parse_vtk_xml(b"# vtk DataFile Version 3.0\n").is_err());
 }
+
+#[test]
+fn grains_held_fixed_are_written_at_rest_with_the_lattice_force_on_them() {
+    use lbdem::engine::lattice::{FluidDisc, FluidLattice};
+    use lbdem::output::snapshots::{disc_grain, write_fixed, FixedSnapshots};
+    use lbdem_kernels::fluid::boundary::Boundaries;
+    use lbdem_kernels::fluid::collide::SolidOperator;
+    use lbdem_kernels::fluid::step::FluidParams;
+    // A disc held fixed in a periodic cell of 20 nodes (h = 0.01 cm, Δt = 1e-4 s), the fluid driven past it.
+    let section: lbdem::units::FluidSection =
+        toml::from_str("density = 1.0\nviscosity = 0.1\nspacing = 0.01\ntau = 0.8\n").unwrap();
+    let units = section.lattice_units().unwrap();
+    let mut lattice = FluidLattice::<f64>::new(
+        20,
+        20,
+        Boundaries::periodic(),
+        FluidParams {
+            tau: 0.8,
+            force: [1e-5, 0.0],
+        },
+    )
+    .unwrap();
+    let disc = FluidDisc {
+        center: [9.5, 9.5],
+        radius: 4.0,
+        velocity: [0.0; 2],
+        spin: 0.0,
+    };
+    let op = SolidOperator::NonEquilibriumBounceBack;
+    lattice.set_solid_operator(op);
+    lattice.cover_with_discs(&[disc], op.weighting());
+    for _ in 0..50 {
+        lattice.step();
+    }
+    let dir = std::env::temp_dir().join(format!("lbdem-fixed-writer-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let at = FixedSnapshots::new(
+        &dir,
+        (Some("fixed"), "cylinder_array", UnitSystem::Cgs),
+        units,
+    );
+    let grain = disc_grain(&disc, units.spacing);
+    let frame = LatticeFrame::of(&units, [0.0; 2], 1.0);
+    write_fixed(&at.case(2), 0, 0.005, &[grain], &lattice, &frame).unwrap();
+    // Case 2's group: its own collections, nothing else.
+    for f in ["particles_case2.pvd", "lattice_case2.pvd"] {
+        let entries = pvd::parse(&std::fs::read_to_string(dir.join(f)).unwrap()).unwrap();
+        assert_eq!(entries.len(), 1, "{f}");
+        assert_eq!(entries[0].time, 0.005, "{f}");
+    }
+    assert!(!dir.join("particles.pvd").exists());
+    let v = parse_vtk_xml(&std::fs::read(dir.join("particles_case2_0000.vtp")).unwrap()).unwrap();
+    let values = |name: &str| v.point(name).unwrap().values.clone();
+    // The disc in cm: centre 9.5 h, semi-axes 4 h (one product each, as the writer's).
+    assert_eq!(v.points, vec![[9.5 * 0.01, 9.5 * 0.01, 0.0]]);
+    assert_eq!(values("semi_axes"), vec![4.0 * 0.01, 4.0 * 0.01, 0.0]);
+    // Held fixed: at rest, m = I = +∞ written as −1, no contact, no bond.
+    assert_eq!(values("velocity"), vec![0.0; 3]);
+    assert_eq!(values("angular_velocity"), vec![0.0]);
+    assert_eq!(values("mass"), vec![-1.0]);
+    assert_eq!(values("moment_of_inertia"), vec![-1.0]);
+    assert_eq!(values("contact_force"), vec![0.0; 3]);
+    assert_eq!(values("contact_count"), vec![0.0]);
+    assert_eq!(values("bonds"), vec![0.0]);
+    // The fluid's force: the lattice's own PSM force on the disc in dyne per unit thickness (the same
+    // conversion, bitwise), pushed along the drive.
+    let f = lattice.solid_forces(1)[0];
+    let want = [units.force_to_physical(f[0]), units.force_to_physical(f[1])];
+    let got = values("fluid_force");
+    assert_eq!(got, vec![want[0], want[1], 0.0]);
+    assert!(got[0] > 0.0, "the fluid drags the disc along +x: {got:?}");
+    assert_eq!(v.unit("fluid_force"), Some("dyne"));
+    // The lattice: the cell's nodes, the disc covering its area π r² (ε in f32: 2^-24 relative each, summed).
+    let l = parse_vtk_xml(&std::fs::read(dir.join("lattice_case2_0000.vti")).unwrap()).unwrap();
+    assert_eq!(l.attributes["WholeExtent"], "0 19 0 19 0 0");
+    let eps = &l.point("solid_fraction").unwrap().values;
+    assert!(eps.iter().all(|e| (0.0..=1.0).contains(e)));
+    let area = std::f64::consts::PI * 16.0;
+    let covered: f64 = eps.iter().sum();
+    assert!(
+        (covered - area).abs() <= 1e-6 * area,
+        "covered {covered} nodes, the disc {area}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
