@@ -595,18 +595,31 @@ pub fn check_tau(units: &LatticeUnits, warnings: &mut Warnings) {
     }
 }
 
-/// Check an expected Mach number: warn above [`MACH_WARN`], refuse above [`MACH_REFUSE`] unless allowed.
-pub fn check_mach(mach: f64, allow_high: bool, warnings: &mut Warnings) -> Result<()> {
-    if !mach.is_finite() || (mach > MACH_REFUSE && !allow_high) {
+/// Check an expected Mach number: warn above [`MACH_WARN`], refuse above [`MACH_REFUSE`] unless allowed,
+/// naming `field`, the input that drives the flow (e.g. `channel.pressure_drop`). `allow_high`: the scene's
+/// `run.allow_high_mach` (`None` for a kind without it).
+pub fn check_mach(
+    field: &str,
+    mach: f64,
+    allow_high: Option<bool>,
+    warnings: &mut Warnings,
+) -> Result<()> {
+    if !mach.is_finite() || (mach > MACH_REFUSE && allow_high != Some(true)) {
+        let allow = if allow_high == Some(false) {
+            "; set run.allow_high_mach = true to run anyway"
+        } else {
+            ""
+        };
         return Err(LbdemError::field(
-            "expected Mach number",
-            format!("{mach:.3}"),
+            field,
+            format!("(gives an expected Mach number of {mach:.3})"),
             &format!(
-                "lattice-Boltzmann compressibility error grows like Ma^2 and BGK loses stability near Ma ~ 0.4; \
-                 lbdem refuses Ma > {MACH_REFUSE}"
+                "gives an expected Mach number of {mach:.3}: the lattice-Boltzmann compressibility error grows \
+                 like Ma^2 and BGK loses stability near Ma ~ 0.4; lbdem refuses Ma > {MACH_REFUSE}"
             ),
-            "lower the driving (pressure drop or acceleration), or shorten the time step (smaller dt raises the \
-             lattice sound speed); set run.allow_high_mach = true to run anyway",
+            &format!(
+                "lower {field}, or shorten the time step (smaller dt raises the lattice sound speed){allow}"
+            ),
         ));
     }
     if mach > MACH_WARN {
@@ -684,9 +697,13 @@ mod tests {
     #[test]
     fn high_mach_is_refused_unless_allowed() {
         let mut w = Warnings::default();
-        assert!(check_mach(0.5, false, &mut w).is_err());
-        assert!(check_mach(0.5, true, &mut w).is_ok());
-        assert!(check_mach(0.05, false, &mut w).is_ok());
+        let e = check_mach("channel.acceleration", 0.5, Some(false), &mut w).unwrap_err();
+        assert!(e.to_string().contains("`channel.acceleration`"), "{e}");
+        assert!(e.to_string().contains("allow_high_mach"), "{e}");
+        let e = check_mach("loading.pressure_drop", 0.5, None, &mut w).unwrap_err();
+        assert!(!e.to_string().contains("allow_high_mach"), "{e}");
+        assert!(check_mach("channel.acceleration", 0.5, Some(true), &mut w).is_ok());
+        assert!(check_mach("channel.acceleration", 0.05, Some(false), &mut w).is_ok());
         assert_eq!(w.0.len(), 1, "only the Ma = 0.5 run is warned about");
     }
 }

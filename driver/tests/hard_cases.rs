@@ -89,7 +89,7 @@ fn mach_above_limit_is_refused_unless_allowed() {
     let g = 8.0 * nu * (0.5 / 3f64.sqrt()) / 64.0;
     let mut scene = lattice_channel(8, 1, tau, "body_force", g, 100, 1e-9);
     let err = ChannelSetup::new(&scene).expect_err("Ma = 0.5 must be refused");
-    assert_eq!(field_of(err), "expected Mach number");
+    assert_eq!(field_of(err), "channel.acceleration");
     scene.run.allow_high_mach = true;
     let setup = ChannelSetup::new(&scene).expect("allowed explicitly");
     assert!(setup.warnings.0.iter().any(|w| w.contains("Mach")));

@@ -3,7 +3,8 @@
 //! asserts that `check` never panics, that `check` and `run` reach the same verdict, and that every refusal
 //! names a field or a line.
 //!
-//! The fuzzer runs `LBDEM_FUZZ_CASES` cases (default 256, a few seconds); for a long campaign:
+//! The fuzzer runs `LBDEM_FUZZ_CASES` cases (default 256, about 15 s, most of it in the starts of the
+//! accepted scenes it runs); for a long campaign:
 //! `LBDEM_FUZZ_CASES=20000 cargo test -p lbdem --test integration hostile::fuzz -- --nocapture`.
 use crate::common::scene_text;
 use crate::common::tweaked_demo;
@@ -105,6 +106,25 @@ fn fuzzer_findings_are_refused_naming_the_field() {
     refused_by_both(&with(&base, "margin", "1e300"), "fluid.spacing");
     // A settling time of 1e300 s: ~1e307 settling steps (a loop without end).
     refused_by_both(&with(&base, "settle_time", "1e300"), "loading.settle_time");
+    // Found by starting the scenes `check` accepts: the pressure-diffusion packing was checked only when
+    // packed, naming `packing.*` (fields of another kind) or `solid.timestep` (fixed by the kind).
+    let pd = scene("pressure_diffusion.toml");
+    refused_by_both(
+        &with(&pd, "radius_max", "0.011"),
+        "pressure_diffusion.radius_max",
+    );
+    refused_by_both(&with(&pd, "width", "0.24"), "pressure_diffusion.width");
+    refused_by_both(
+        &with(&pd, "radius_min", "0.007"),
+        "pressure_diffusion.radius_min",
+    );
+    // A bonding gap of 1e15 cm bonded every pair of grains: refused by the packing's DEM step only at start.
+    let dry = with(&scene("uniaxial_compression.toml"), "gap", "1e15");
+    refused_by_both(&dry, "solid.bonds.gap");
+    refused_by_both(
+        &with(&scene("uniaxial_compression.toml"), "gap", "0.0071"),
+        "solid.bonds.gap",
+    );
 }
 
 #[test]
@@ -351,22 +371,416 @@ fn periodic_checkpoints_flush_the_tables() {
     assert_eq!(series.lines().count(), 101, "{series}");
 }
 
+/// `text` with `[output] snapshot_interval = value` (added when the scene has no such key).
+fn snapshot_interval(text: &str, value: &str) -> String {
+    if text.contains("snapshot_interval") {
+        with(text, "snapshot_interval", value)
+    } else {
+        assert!(
+            !text.contains("[output]"),
+            "add the key to the existing [output]"
+        );
+        format!("{text}\n[output]\nsnapshot_interval = {value}\n")
+    }
+}
+
+#[test]
+fn snapshot_counts_are_limited_naming_the_interval() {
+    // Were: a snapshot every step (1e-300 s between snapshots rounds to one step), unbudgeted. Each scene
+    // lengthened to more than 10^4 steps (so one snapshot per step is more than the limit).
+    for (name, text, (key, longer)) in [
+        ("coupled_demo", DEMO.to_string(), ("steps", "20000")),
+        (
+            "terminal_velocity",
+            scene("terminal_velocity.toml"),
+            ("duration", "1.5"), // 12 397 steps
+        ),
+        (
+            "consolidation",
+            scene("consolidation.toml"),
+            ("duration", "5.0"), // 12 500 steps
+        ),
+        ("terzaghi", scene("terzaghi.toml"), ("duration", "10.0")), // 25 000 steps
+        (
+            "fracture",
+            scene("fracture/quick/base.toml"),
+            ("duration", "0.25"), // 12 500 steps
+        ),
+    ] {
+        let e = refused_by_both(
+            &snapshot_interval(&with(&text, key, longer), "1e-300"),
+            "output.snapshot_interval",
+        );
+        assert!(
+            e.contains("snapshot files") && e.contains("raise output.snapshot_interval"),
+            "{name}: {e}"
+        );
+        // 0 (only the first and the last) and the default stay valid.
+        app::check_text(&snapshot_interval(&text, "0"), "t.toml")
+            .unwrap_or_else(|e| panic!("{name}: {e}"));
+    }
+    // A dry compression's snapshots are counted in records: one every record (of one step) is one per step.
+    let dry = with(
+        &with(&scene("uniaxial_compression.toml"), "record_interval", "1"),
+        "vtk_interval",
+        "1",
+    );
+    refused_by_both(&dry, "loading.vtk_interval");
+}
+
+/// The memory `lbdem check` estimates for `text` (its "memory: about 1.2 MB" line), in bytes.
+fn estimated_bytes(description: &str) -> Option<f64> {
+    let rest = description.split("memory: about ").nth(1)?;
+    let mut words = rest.split_whitespace();
+    let x: f64 = words.next()?.parse().ok()?;
+    let scale = match words.next()? {
+        "B" => 1.0,
+        "kB" => 1e3,
+        "MB" => 1e6,
+        "GB" => 1e9,
+        _ => return None,
+    };
+    Some(x * scale)
+}
+
+#[test]
+fn records_are_budgeted_naming_the_interval() {
+    // A record every step (1e-300 s between records) now shows in the memory estimate, as the part of the
+    // interval that sets it; before, records were not counted at all.
+    for (text, part, field) in [
+        (
+            with(
+                &scene("fracture/quick/base.toml"),
+                "record_interval",
+                "1e-300",
+            ),
+            "records",
+            "output.record_interval",
+        ),
+        (
+            with(&scene("terzaghi.toml"), "record_interval", "1e-300"),
+            "pore-pressure profiles",
+            "terzaghi.record_interval",
+        ),
+    ] {
+        let steps_of_records = match app::check_text(&text, "t.toml") {
+            Ok(d) => {
+                assert!(d.contains(&format!("{part}: ")), "{d}");
+                estimated_bytes(&d).unwrap()
+            }
+            // On a machine with less memory than the records take: refused naming the interval.
+            Err(e) => {
+                assert!(e.to_string().contains(&format!("`{field}`")), "{e}");
+                continue;
+            }
+        };
+        // The same scene with the bundled interval needs less.
+        let base = if field.starts_with("output") {
+            scene("fracture/quick/base.toml")
+        } else {
+            scene("terzaghi.toml")
+        };
+        let bundled = estimated_bytes(&app::check_text(&base, "t.toml").unwrap()).unwrap();
+        assert!(
+            steps_of_records > bundled,
+            "{steps_of_records} vs {bundled}"
+        );
+    }
+    // With the memory available injected (so that the test does not depend on the machine), the records are
+    // what is refused, with the field.
+    let dir = scratch("records");
+    let path = dir.join("fracture.toml");
+    std::fs::write(
+        &path,
+        with(
+            &scene("fracture/quick/base.toml"),
+            "record_interval",
+            "1e-300",
+        ),
+    )
+    .unwrap();
+    let limit = {
+        // The bundled scene's estimate plus 10 %: enough for everything but the extra records.
+        let d = app::check_text(&scene("fracture/quick/base.toml"), "t.toml").unwrap();
+        (estimated_bytes(&d).unwrap() * 1.1) as u64
+    };
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_lbdem"))
+        .args(["check", path.to_str().unwrap()])
+        .env("LBDEM_MEMORY_LIMIT", limit.to_string())
+        .output()
+        .unwrap();
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success(),
+        "{}",
+        String::from_utf8_lossy(&o.stdout)
+    );
+    assert!(e.contains("`output.record_interval`"), "{e}");
+}
+
+#[test]
+fn dry_step_counts_are_limited_naming_the_field() {
+    let dry = scene("uniaxial_compression.toml");
+    // Were: accepted, with ~1e304 loading steps (a run without end) or an overflowing step count.
+    refused_by_both(
+        &with(&dry, "platen_speed", "1e-300"),
+        "loading.platen_speed",
+    );
+    let e = refused_by_both(&with(&dry, "platen_speed", "1e-6"), "loading.platen_speed");
+    assert!(e.contains("above the limit"), "{e}");
+    let settle = dry.replace(
+        "[loading]\n",
+        "[loading]\nsettle_steps = 9223372036854775807\n",
+    );
+    refused_by_both(&settle, "loading.settle_steps");
+    // The loading runs in whole record intervals: one of 2^62 steps is a run without end.
+    refused_by_both(
+        &with(&dry, "record_interval", "4611686018427387904"),
+        "loading.record_interval",
+    );
+    let boundary = dry.replace(
+        "[loading]\n",
+        "[loading]\ntest = \"boundary_stress\"\naxial_stress = 40.0\nlateral_stress = 50.0\n\
+         steps = 9223372036854775807\n",
+    );
+    refused_by_both(&boundary, "loading.steps");
+    // The bundled scene stays valid.
+    app::check_text(&dry, "t.toml").unwrap();
+}
+
+#[test]
+fn mach_refusals_name_the_driving_input() {
+    // Were: "`expected Mach number`", which is no field of the scene.
+    let body = with(&scene("poiseuille_body_force.toml"), "acceleration", "1e3");
+    let e = refused_by_both(&body, "channel.acceleration");
+    assert!(e.contains("Mach") && e.contains("allow_high_mach"), "{e}");
+    let cyl = with(&scene("cylinder_array_reynolds.toml"), "reynolds", "[1e6]");
+    let e = refused_by_both(&cyl, "cylinder_array.reynolds");
+    assert!(e.contains("Mach"), "{e}");
+}
+
+/// A porous scene of `columns × rows` discs of the given diameters (cm, at a spacing of 0.011 cm) and pressure
+/// drops.
+fn porous_scene(columns: u64, rows: u64, pitch: f64, diameters: &[f64], drops: usize) -> String {
+    let list = |v: Vec<String>| v.join(", ");
+    format!(
+        "[scene]\nkind = \"porous_flow\"\nunits = \"cgs\"\n[fluid]\ndensity = 1.0\nviscosity = 0.1\n\
+         spacing = 0.011\ntau = 0.8\n[porous]\ncolumns = {columns}\nrows = {rows}\npitch = {pitch}\n\
+         diameters = [{}]\npressure_drops = [{}]\njitter = 0.5\n[run]\nsteps = 1000\n",
+        list(diameters.iter().map(|d| d.to_string()).collect()),
+        list((1..=drops).map(|k| format!("{:e}", k as f64 * 1e-4)).collect()),
+    )
+}
+
+/// The narrowest gap of `case` by comparing every pair of discs (the definition; O(n²)).
+fn every_pair_gap(case: &lbdem::kinds::porous_flow::PorousCase) -> f64 {
+    let discs = case.discs();
+    let ny = case.size().1 as f64;
+    let mut gap = f64::INFINITY;
+    for (a, da) in discs.iter().enumerate() {
+        for db in discs.iter().skip(a + 1) {
+            let mut dy = (da.center[1] - db.center[1]).abs();
+            if !case.walls {
+                dy = dy.min(ny - dy);
+            }
+            let dx = da.center[0] - db.center[0];
+            gap = gap.min((dx * dx + dy * dy).sqrt() - da.radius - db.radius);
+        }
+        if case.walls {
+            gap = gap.min(da.center[1] + 0.5 - da.radius);
+            gap = gap.min(ny - 0.5 - da.center[1] - da.radius);
+        }
+        if !case.walls && case.rows == 1 {
+            gap = gap.min(ny - 2.0 * da.radius);
+        }
+    }
+    gap
+}
+
+#[test]
+fn the_porous_narrowest_gap_is_exact_and_linear_in_the_discs() {
+    use lbdem::kinds::porous_flow::{PorousFlowScene, PorousSetup};
+    let parse = |text: &str| -> PorousFlowScene {
+        lbdem::input::parse::parse_scene(text, "t.toml").unwrap()
+    };
+    let template = PorousSetup::new(&parse(&scene("porous_darcy.toml")))
+        .unwrap()
+        .cases[0]
+        .clone();
+    // Exactly the pairwise minimum (same bits), over lattices of every shape, jitter up to its limit, walls
+    // or periodic, thin and fat discs.
+    let mut compared = 0;
+    for columns in [4, 5, 7] {
+        for rows in [1, 2, 3, 6] {
+            for walls in [false, true] {
+                for jitter in [0.0, 0.3, 0.9, 0.999] {
+                    for fraction in [0.1, 0.5, 0.95] {
+                        for seed in [1, 2] {
+                            let mut c = template.clone();
+                            c.columns = columns;
+                            c.rows = rows;
+                            c.walls = walls;
+                            c.jitter = jitter;
+                            c.diameter = fraction * c.pitch as f64;
+                            c.seed = seed;
+                            let (gap, _) = c.min_gap_counted();
+                            assert_eq!(gap, every_pair_gap(&c), "{c:?}");
+                            compared += 1;
+                        }
+                    }
+                }
+            }
+        }
+    }
+    assert_eq!(compared, 3 * 4 * 2 * 4 * 3 * 2);
+    // The largest slab allowed (2 x 10^4 discs): a few pairs per disc (each disc and its 8 neighbour cells,
+    // each pair once: 4 per disc), where the pairwise search measured 2 x 10^8.
+    let mut big = template.clone();
+    big.columns = 200;
+    big.rows = 100;
+    big.jitter = 0.5;
+    let (gap, pairs) = big.min_gap_counted();
+    assert!(pairs <= 4 * 20_000, "{pairs} pairs measured");
+    assert!(gap > 0.0 && gap < big.pitch as f64 - big.diameter, "{gap}");
+    // Measured once per diameter, not once per case: 2 diameters x 5000 pressure drops.
+    let setup = PorousSetup::new(&parse(&porous_scene(4, 1, 0.264, &[0.1, 0.15], 5000))).unwrap();
+    assert_eq!(setup.cases.len(), 10_000);
+    assert_eq!(setup.narrowest_gaps.len(), 10_000);
+    assert_eq!(setup.narrowest_gaps[0], setup.cases[0].min_gap());
+    assert_eq!(setup.narrowest_gaps[9_999], setup.cases[9_999].min_gap());
+}
+
+#[test]
+fn check_of_the_largest_porous_scene_allowed_returns() {
+    // 2 x 10^4 discs (pitch 3 nodes: a lattice of 608 x 300 nodes) and 10^4 cases, both at their limits.
+    // Before, the narrowest gap compared every pair of discs for every case, twice: ~4 x 10^12 pair
+    // measurements, days of `check`. Now a fraction of a second; the bound is generous (a debug build on a
+    // loaded 2-core machine) and only there so that a regression fails instead of hanging.
+    let text = porous_scene(200, 100, 0.033, &[0.0165, 0.022], 5000);
+    let (tx, rx) = std::sync::mpsc::channel();
+    std::thread::spawn(move || {
+        let _ = tx.send(app::check_text(&text, "t.toml").map_err(|e| e.to_string()));
+    });
+    let bound = std::time::Duration::from_secs(120);
+    let described = rx
+        .recv_timeout(bound)
+        .expect("check of the porous scene did not return within two minutes");
+    match described {
+        Ok(d) => {
+            assert!(d.contains("20000 discs"), "{}", &d[..d.len().min(2000)]);
+            // One line per case.
+            assert_eq!(d.matches(" discs, D = ").count(), 10_000);
+        }
+        // Only on a machine with less than the ~70 MB the lattice needs.
+        Err(e) => assert!(e.contains("this machine has"), "{e}"),
+    }
+}
+
+#[test]
+fn a_non_finite_result_exits_non_zero_from_the_command_line_with_the_summary() {
+    // A compression test that ends at its first record (max_strain below one record's strain): Young's
+    // modulus, a slope, needs two points of the elastic part, so it is NaN.
+    let text = with(
+        &with(
+            &with(
+                &with(&scene("uniaxial_compression.toml"), "max_strain", "1e-6"),
+                "width",
+                "1.0",
+            ),
+            "height",
+            "2.0",
+        ),
+        "record_interval",
+        "10",
+    )
+    .replace("[loading]\n", "[loading]\nsettle_steps = 10\n");
+    let dir = scratch("nonfinite-cli");
+    let path = dir.join("dry.toml");
+    std::fs::write(&path, text).unwrap();
+    let out = dir.join("out");
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_lbdem"))
+        .args(["run", path.to_str().unwrap(), "--out"])
+        .arg(&out)
+        .arg("--quiet")
+        .output()
+        .unwrap();
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{e}");
+    assert!(e.contains("results.test.youngs_modulus"), "{e}");
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(
+        summary["non_finite"],
+        serde_json::json!(["results.test.youngs_modulus"])
+    );
+    // What was measured is there.
+    assert!(summary["results"]["particles"].as_u64().unwrap() > 0);
+}
+
 // ---------------------------------------------------------------------------------------------------------
 // The fuzzer.
 
-/// The bundled scenes and the demo: the seeds of the mutations.
-fn seeds() -> Vec<String> {
-    let mut out = vec![DEMO.to_string()];
-    for dir in [PathBuf::from(SCENES), Path::new(SCENES).join("fracture")] {
-        let mut files: Vec<PathBuf> = std::fs::read_dir(&dir)
-            .unwrap()
-            .map(|e| e.unwrap().path())
-            .filter(|p| p.extension().is_some_and(|e| e == "toml"))
-            .collect();
+/// The seeds of the mutations: the bundled scenes (every folder under `scenes/`, recursively) and the demo,
+/// grouped by kind (sorted by kind name), so that a case picks a kind uniformly, then a scene of that kind
+/// (there are 25 fracture scenes and one dry scene).
+fn seeds() -> &'static [Vec<String>] {
+    static SEEDS: std::sync::OnceLock<Vec<Vec<String>>> = std::sync::OnceLock::new();
+    SEEDS.get_or_init(|| {
+        fn walk(dir: &Path, out: &mut Vec<PathBuf>) {
+            for e in std::fs::read_dir(dir).unwrap() {
+                let p = e.unwrap().path();
+                if p.is_dir() {
+                    walk(&p, out);
+                } else if p.extension().is_some_and(|e| e == "toml") {
+                    out.push(p);
+                }
+            }
+        }
+        let mut files = Vec::new();
+        walk(Path::new(SCENES), &mut files);
         files.sort();
-        out.extend(files.iter().map(|p| std::fs::read_to_string(p).unwrap()));
+        let mut by_kind: std::collections::BTreeMap<String, Vec<String>> = Default::default();
+        let texts = files
+            .iter()
+            .map(|p| std::fs::read_to_string(p).unwrap())
+            .chain([DEMO.to_string()]);
+        for text in texts {
+            let kind = text
+                .lines()
+                .find_map(|l| l.trim().strip_prefix("kind = \""))
+                .and_then(|k| k.split('"').next())
+                .expect("every scene names its kind")
+                .to_string();
+            by_kind.entry(kind).or_default().push(text);
+        }
+        by_kind.into_values().collect()
+    })
+}
+
+#[test]
+fn the_fuzzer_seeds_are_every_bundled_scene_by_kind() {
+    let seeds = seeds();
+    // Every kind of the registry has seeds.
+    assert_eq!(seeds.len(), lbdem::kinds::REGISTRY.len());
+    let all: usize = seeds.iter().map(Vec::len).sum();
+    let mut files = 0;
+    let mut dirs = vec![PathBuf::from(SCENES)];
+    while let Some(d) = dirs.pop() {
+        for e in std::fs::read_dir(d).unwrap() {
+            let p = e.unwrap().path();
+            if p.is_dir() {
+                dirs.push(p);
+            } else if p.extension().is_some_and(|e| e == "toml") {
+                files += 1;
+            }
+        }
     }
-    out
+    // The scenes of the subfolders (scenes/fracture/quick/, scenes/fracture/storage/) included, and the demo.
+    assert_eq!(all, files + 1);
+    assert!(seeds
+        .iter()
+        .flatten()
+        .any(|t| t.contains("kind = \"terzaghi\"") && t.contains("storage")));
 }
 
 const HOSTILE: &[&str] = &[
@@ -509,20 +923,31 @@ proptest! {
     #![proptest_config(ProptestConfig { cases: fuzz_cases(), failure_persistence: None, ..ProptestConfig::default() })]
 
     /// Mutated bundled scenes: `check` never panics; a refusal names a field (`…`) or a line; `run` gives
-    /// exactly the same refusal without writing anything. (A scene `check` accepts is not run here: that would
-    /// be a whole simulation per case; `run` reaches the same verdict through the same `Case::read`.)
+    /// exactly the same refusal without writing anything. A scene `check` accepts whose memory estimate is small
+    /// is started (packed, settled, lattices built: the scenes' starts take up to a few seconds) and stopped
+    /// before its first chunk: `run` must not refuse it (a validation `check` missed) nor panic.
     #[test]
     fn fuzz_mutated_scenes_never_panic_and_check_agrees_with_run(
-        seed in 0usize..64,
+        kind in any::<usize>(),
+        seed in any::<usize>(),
         mutations in proptest::collection::vec(mutation(), 1..4),
     ) {
         let seeds = seeds();
-        let mut text = seeds[seed % seeds.len()].clone();
+        let of_kind = &seeds[kind % seeds.len()];
+        let mut text = of_kind[seed % of_kind.len()].clone();
         for m in &mutations {
             text = apply(&text, m);
         }
         match app::check_text(&text, "fuzz.toml") {
-            Ok(description) => prop_assert!(description.contains("is valid")),
+            Ok(description) => {
+                prop_assert!(description.contains("is valid"));
+                // Small: at most 2 MB, so that a start stays short (about one accepted case in two; ~5 % of the
+                // cases, ~10 s per 256 cases in the test build).
+                let small = estimated_bytes(&description).is_some_and(|b| b <= 2e6);
+                if small {
+                    started_and_stopped(&text)?;
+                }
+            }
             Err(e) => {
                 let msg = e.to_string();
                 prop_assert!(msg.contains('`') || msg.contains("line "), "names no field: {msg}");
@@ -554,6 +979,30 @@ proptest! {
             &b, DEMO, "coupled_demo",
         );
         prop_assert!(r.is_err());
+    }
+}
+
+/// Start a run of `text` (accepted by `check`) in a fresh directory and stop it before its first chunk: it must
+/// end interrupted (or, for a start that already steps, diverged or with a non-finite result: physics, not
+/// validation), never refused.
+fn started_and_stopped(text: &str) -> Result<(), TestCaseError> {
+    static RUNS: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+    let n = RUNS.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    let dir = std::env::temp_dir().join(format!("lbdem-fuzz-run-{}-{n}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let mut o = quiet();
+    o.stop_after = Some(0);
+    let r = app::run_text(text, "fuzz.toml", &dir, &o);
+    let _ = std::fs::remove_dir_all(&dir);
+    match r {
+        Err(LbdemError::Interrupted { .. })
+        | Err(LbdemError::Diverged { .. })
+        | Err(LbdemError::DivergedParticle { .. })
+        | Err(LbdemError::NonFiniteResult { .. })
+        | Ok(_) => Ok(()),
+        Err(e) => Err(TestCaseError::fail(format!(
+            "check accepted the scene, run refused it: {e}\n--- scene ---\n{text}"
+        ))),
     }
 }
 

@@ -2,8 +2,8 @@
 //! records, snapshots, cases) is computed from the scene in checked integer arithmetic, the memory a run needs
 //! is estimated part by part ([`Budget`]) and refused above the memory this machine has available, and step
 //! counts above [`MAX_STEPS`] are refused. `lbdem check` and `lbdem run` share this code (it runs in
-//! `Kind::setup`), so check refuses exactly what run would refuse, without allocating anything that grows with
-//! the scene.
+//! `Kind::budget`, after `Kind::validate` and `Kind::setup`; see `crate::run::Case::new`), so check refuses
+//! exactly what run would refuse, without allocating anything that grows with the scene.
 //!
 //! Each refusal names the scene field that produced the size (`porous.rows`, `fluid.spacing`, …).
 use serde::Serialize;
@@ -378,17 +378,33 @@ pub fn cases(field: &str, n: u64) -> Result<u64> {
     Ok(n)
 }
 
-/// Refuse more than [`MAX_SNAPSHOTS`] snapshot files, naming `field`.
+/// Refuse more than [`MAX_SNAPSHOTS`] snapshot files, naming `field` (the interval that sets their number).
 pub fn snapshots(field: &str, n: u64) -> Result<u64> {
     if n > MAX_SNAPSHOTS {
         return Err(LbdemError::field(
             field,
             format!("(gives {n} snapshots)"),
             &format!("gives {n} snapshot files, above the limit of {MAX_SNAPSHOTS} per run"),
-            "snapshot less often",
+            &format!("raise {field} to snapshot less often (0 writes only the first and the last snapshot)"),
         ));
     }
     Ok(n)
+}
+
+/// The snapshots of a run of `total` steps (or records) with one every `every` (0: only the first and the
+/// last): at most one per multiple of `every`, plus the first and the last (saturating: a count beyond `u64`
+/// is refused anyway). Refused above [`MAX_SNAPSHOTS`] naming `field`.
+pub fn snapshots_every(field: &str, total: u64, every: u64) -> Result<u64> {
+    snapshots(
+        field,
+        total.checked_div(every).unwrap_or(0).saturating_add(2),
+    )
+}
+
+/// The records (table rows) of a run of `total` steps with one every `every` steps (at least 1): one per
+/// multiple of `every`, plus the first and the last (saturating: the memory check refuses such a count).
+pub fn records_every(total: u64, every: u64) -> u64 {
+    (total / every.max(1)).saturating_add(2)
 }
 
 /// Add a fluid lattice of `nx × ny` nodes in precision `float_bytes` (4 or 8) to `budget`, refusing a lattice

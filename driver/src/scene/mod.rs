@@ -299,6 +299,15 @@ impl SnapshotSection {
             Some(_) => 0,
         })
     }
+
+    /// The snapshots a run of `total` steps of `dt` writes ([`Self::every`]), refused above
+    /// [`limits::MAX_SNAPSHOTS`] naming `output.snapshot_interval` (0 when `vtk = false`).
+    pub fn budget(&self, dt: f64, total: u64) -> Result<u64> {
+        match self.every(dt, total) {
+            Some(every) => limits::snapshots_every("output.snapshot_interval", total, every),
+            None => Ok(0),
+        }
+    }
 }
 
 pub(crate) use crate::error::positive;

@@ -226,6 +226,22 @@ pub fn validate_packing_and_solid(p: &PackingSection, s: &SolidSection) -> Resul
         }
         None => {}
     }
+    // The bonding gap is a tolerance for touching grains: the a-priori critical step counts six bonds per
+    // grain and the memory estimate a few, but a gap of a grain size bonds grains across their neighbours (up
+    // to every pair: the packing then refuses its DEM step, or runs out of memory). A tenth of the smallest
+    // radius still joins only neighbours.
+    let gap = bond_gap(s);
+    if s.bonds.is_some() && gap >= 0.1 * p.radius_min {
+        return Err(LbdemError::field(
+            "solid.bonds.gap",
+            gap,
+            &format!(
+                "must be below a tenth of packing.radius_min ({:e}): bonds join touching neighbours only",
+                0.1 * p.radius_min
+            ),
+            "e.g. 1e-3 cm for the dissertation's grains (radius 0.07-0.11 cm)",
+        ));
+    }
     let spec = packing_spec::<f64>(p, s);
     crate::engine::dem::packing::check_packing_spec(&spec)
 }

@@ -197,7 +197,16 @@ impl ChannelSetup {
         };
         let umax = gradient * width * width / (8.0 * mu);
         let mach = units.mach(umax);
-        check_mach(mach, scene.run.allow_high_mach, &mut warnings)?;
+        let driving = match c.drive {
+            ChannelDrive::Pressure => "channel.pressure_drop",
+            ChannelDrive::BodyForce => "channel.acceleration",
+        };
+        check_mach(
+            driving,
+            mach,
+            Some(scene.run.allow_high_mach),
+            &mut warnings,
+        )?;
         if ny < 3 {
             warnings.push(format!(
                 "only {ny} node(s) across the channel: the half-way bounce-back error (16(tau-1/2)^2-3)/(3H^2) \

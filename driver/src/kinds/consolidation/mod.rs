@@ -386,6 +386,8 @@ impl Kind for Consolidation {
             "the lattice height",
             side(c.rows as u64 + 1) + 2.0,
         )?;
+        // The run takes at least 10 fluid steps (`start`).
+        scene.output.budget(u.timestep, steps.max(10))?;
         let mut b = Budget::new();
         b.note(format!(
             "DEM critical step {critical:.4e} (time units of the scene): {substeps} DEM sub-step(s) per fluid step \
@@ -399,6 +401,13 @@ impl Kind for Consolidation {
             "consolidation.columns",
             grains,
             limits::GRAIN_BYTES,
+        )?;
+        // The bottom pore pressure, (time, p) every 10 fluid steps (`ConsolidationState::advance`).
+        b.add_items(
+            "pore-pressure records",
+            "consolidation.duration",
+            limits::records_every(steps.max(10), 10),
+            16,
         )?;
         Ok(b)
     }

@@ -275,7 +275,9 @@ impl Kind for CoupledDemo {
         Ok(scene.demo.clone())
     }
 
-    fn budget(_scene: &DemoScene, d: &DemoSection) -> Result<Budget> {
+    fn budget(scene: &DemoScene, d: &DemoSection) -> Result<Budget> {
+        // Lattice units: the model time is the step count.
+        scene.output.budget(1.0, d.steps)?;
         let mut b = Budget::new();
         limits::lattice(
             &mut b,

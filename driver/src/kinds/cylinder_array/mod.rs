@@ -473,7 +473,17 @@ impl ArraySetup {
                 let fbar = sangani_acrivos_drag(c).unwrap_or(100.0);
                 let u = f * (l * l) as f64 / (fbar * case.viscosity());
                 let peak = 1.5 * u * l as f64 / case.gap().max(1.0);
-                check_mach(peak * 3f64.sqrt(), scene.run.allow_high_mach, &mut warnings)?;
+                let driving = if a.reynolds.is_some() {
+                    "cylinder_array.reynolds"
+                } else {
+                    "cylinder_array.acceleration"
+                };
+                check_mach(
+                    driving,
+                    peak * 3f64.sqrt(),
+                    Some(scene.run.allow_high_mach),
+                    &mut warnings,
+                )?;
                 cases.push(case.clone());
             }
         }

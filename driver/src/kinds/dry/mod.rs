@@ -51,7 +51,7 @@ use crate::engine::dem::staged::{BoundaryStressRun, CompressionRun};
 use crate::engine::dem::world::{DemWorld, CRITICAL_STEP_SAFETY};
 use crate::engine::exec::Exec;
 use crate::error::{non_negative, positive, LbdemError, Result};
-use crate::input::limits::Budget;
+use crate::input::limits::{self, Budget};
 use crate::observe::health::dem_health;
 use crate::output::snapshots::write_series;
 use crate::output::vtk::{BreakClock, Stamp, Units};
@@ -515,8 +515,22 @@ impl Kind for Dry {
         scene.validate()
     }
 
-    fn budget(scene: &DryScene, _setup: &DrySetup) -> Result<Budget> {
-        packing_budget(&scene.packing)
+    fn budget(scene: &DryScene, setup: &DrySetup) -> Result<Budget> {
+        let l = &scene.loading;
+        let steps = dry_steps(scene, setup.timestep)?;
+        // One stress-strain record per record interval (none while settling), plus the last.
+        let records = limits::records_every(steps, l.record_interval);
+        if l.vtk_interval > 0 {
+            limits::snapshots_every("loading.vtk_interval", records, l.vtk_interval)?;
+        }
+        let mut b = packing_budget(&scene.packing)?;
+        b.add_items(
+            "stress-strain records",
+            "loading.record_interval",
+            records,
+            std::mem::size_of::<CurvePoint>() as u64,
+        )?;
+        Ok(b)
     }
 
     fn setup(scene: &DryScene) -> Result<DrySetup> {
@@ -578,16 +592,9 @@ impl Kind for Dry {
     }
 
     fn total_steps(case: &Case<Self>, _state: &DryState) -> Option<u64> {
-        let scene = &case.scene;
-        let l = &scene.loading;
-        Some(match l.test {
-            LoadingKind::BoundaryStress => l.steps,
-            LoadingKind::Compression => {
-                // Steps to reach max_strain at the platen speed (the test usually stops earlier, at failure).
-                let per_step = 2.0 * l.platen_speed * scene.solid.timestep / scene.packing.height;
-                l.settle_steps + (l.max_strain / per_step).ceil().max(1.0) as u64
-            }
-        })
+        // Checked by `budget`: the loading steps to reach max_strain at the platen speed (the test usually
+        // stops earlier, at failure).
+        dry_steps(&case.scene, case.setup.timestep).ok()
     }
 
     fn finished(_case: &Case<Self>, state: &DryState) -> bool {
@@ -614,6 +621,47 @@ impl Kind for Dry {
 
     fn results(_case: &Case<Self>, state: &DryState) -> Result<serde_json::Value> {
         Ok(each!(state, r => r.results()))
+    }
+}
+
+/// The steps of a dry run after packing, refused above [`limits::MAX_STEPS`] naming the field that sets them:
+/// `loading.steps` (boundary stress); the settling steps and the loading steps to reach `loading.max_strain`
+/// at `loading.platen_speed` (compression), the loading in whole record intervals (the test stops at the end of
+/// one).
+fn dry_steps(scene: &DryScene, dt: f64) -> Result<u64> {
+    let l = &scene.loading;
+    match l.test {
+        LoadingKind::BoundaryStress => limits::steps("loading.steps", l.steps),
+        LoadingKind::Compression => {
+            if l.settle_steps > limits::MAX_STEPS {
+                limits::steps("loading.settle_steps", l.settle_steps)?;
+            }
+            // Both platens move: the axial strain grows by 2 v dt / height per step.
+            let per_step = 2.0 * l.platen_speed * dt / scene.packing.height;
+            let loading = limits::steps_for("loading.platen_speed", l.max_strain, per_step, true)?;
+            let interval = l.record_interval.max(1);
+            let field = if interval > loading {
+                "loading.record_interval"
+            } else {
+                "loading.platen_speed"
+            };
+            let loading = limits::mul(
+                field,
+                "the loading steps",
+                loading.div_ceil(interval),
+                interval,
+            )?;
+            let loading = limits::steps(field, loading)?;
+            let field = if l.settle_steps > loading {
+                "loading.settle_steps"
+            } else {
+                field
+            };
+            limits::steps(
+                field,
+                limits::add(field, "the step count", l.settle_steps, loading)?,
+            )
+        }
     }
 }
 

@@ -187,6 +187,20 @@ impl Default for FractureOutput {
     }
 }
 
+impl FractureOutput {
+    /// Steps of `dt` between records (at least 1) and between snapshots (at least 1; 0: only at the drop and
+    /// at the end). The casts saturate: an interval beyond `u64` steps records only at the drop and the end.
+    pub fn intervals(&self, dt: f64) -> (u64, u64) {
+        let record_every = ((self.record_interval / dt).round() as u64).max(1);
+        let snapshot_every = if self.snapshot_interval > 0.0 {
+            ((self.snapshot_interval / dt).round() as u64).max(1)
+        } else {
+            0
+        };
+        (record_every, snapshot_every)
+    }
+}
+
 fn default_record() -> f64 {
     1e-3
 }
@@ -442,7 +456,7 @@ impl FractureScene {
             / (4.0 * self.packing.radius_max)
             / n;
         let expected_mach = u / units.sound_speed;
-        crate::units::check_mach(expected_mach, false, warnings)?;
+        crate::units::check_mach("loading.pressure_drop", expected_mach, None, warnings)?;
         Ok(FluidSetup {
             units,
             nodes,
@@ -877,14 +891,16 @@ impl<'a, S: std::ops::Deref<Target = FractureState>> FractureRun<'a, S> {
 
     /// Steps between records and between snapshots.
     fn intervals(&self) -> (u64, u64) {
-        let o = &self.scene.output;
-        let record_every = ((o.record_interval / self.state.dt).round() as u64).max(1);
-        let snapshot_every = if o.snapshot_interval > 0.0 {
-            ((o.snapshot_interval / self.state.dt).round() as u64).max(1)
-        } else {
-            u64::MAX
-        };
-        (record_every, snapshot_every)
+        let (record_every, snapshot_every) = self.scene.output.intervals(self.state.dt);
+        // 0: only the snapshots at the drop and at the end.
+        (
+            record_every,
+            if snapshot_every == 0 {
+                u64::MAX
+            } else {
+                snapshot_every
+            },
+        )
     }
 
     fn lateral_height(&self) -> f64 {
@@ -1525,6 +1541,23 @@ impl Kind for FractureTest {
                 true,
             )?;
         }
+        // Records and snapshots after the drop, at the steps of `FractureRun::intervals` (plus those at the drop
+        // and at the end).
+        let (record_every, snapshot_every) = scene.output.intervals(setup.timestep);
+        let o = &scene.output;
+        if o.vtk || o.figures {
+            limits::snapshots_every("output.snapshot_interval", setup.steps, snapshot_every)?;
+        }
+        // A record is a history row (9 values) and, with a fluid, the pressure and the speed along the centre
+        // line (at most one value per lattice column each).
+        let columns = setup.fluid.as_ref().map_or(0, |f| f.nodes[0] as u64);
+        b.add_items(
+            "records",
+            "output.record_interval",
+            limits::records_every(setup.steps, record_every),
+            limits::mul("fluid.spacing", "a record's size", columns, 16)?
+                .saturating_add(9 * 8 + 3 * 24),
+        )?;
         Ok(b)
     }
 

@@ -26,7 +26,10 @@ use lbdem_kernels::fluid::step::FluidParams;
 use lbdem_reference::analytic::{slab_mean_pressure, slab_pressure};
 use serde::{Deserialize, Serialize};
 
-use crate::engine::dem::packing::{generate_packing, PackingSpec};
+use crate::engine::dem::packing::{
+    check_packing_spec, generate_packing, hexagonal_packing, PackingSpec,
+};
+use crate::engine::dem::world::{DemWorld, CRITICAL_STEP_SAFETY};
 use crate::engine::exec::{Exec, ExecTarget};
 use crate::engine::lattice::FluidLattice;
 use crate::error::{positive, LbdemError, Result};
@@ -196,15 +199,56 @@ pub struct DiffusionState {
 
 impl Persist for DiffusionState {}
 
+/// The packing of the slab (physical units), by the dissertation's procedure: what `start` packs.
+fn slab_packing(d: &PressureDiffusionSection) -> PackingSpec<f64> {
+    let mut spec = PackingSpec::dissertation(d.width, d.height, 1.0, d.seed);
+    spec.radius_min = d.radius_min;
+    spec.radius_max = d.radius_max;
+    spec
+}
+
+/// What the packing of `start` refuses, checked before it (so that `check` refuses it too), naming this kind's
+/// fields: the slab's size against the grains ([`check_packing_spec`]), and the packing's DEM step (the
+/// dissertation's, 5e-5 s) against the critical step of the lightest grain, of radius `radius_min` (a 2 x 2
+/// probe of them: the critical step takes an assumed coordination, not the actual contacts; the packed grains
+/// are no lighter, so this refuses all that the packing refuses).
+fn check_slab_packing(d: &PressureDiffusionSection) -> Result<()> {
+    let spec = slab_packing(d);
+    check_packing_spec(&spec).map_err(|e| match e {
+        LbdemError::InvalidField {
+            field,
+            value,
+            problem,
+            hint,
+        } => LbdemError::InvalidField {
+            field: field.replacen("packing.", "pressure_diffusion.", 1),
+            value,
+            problem,
+            hint,
+        },
+        e => e,
+    })?;
+    let probe = hexagonal_packing(2, 2, d.radius_min, 1.0, 0.0, spec.density, 0);
+    if DemWorld::new(probe, spec.contact, spec.timestep).is_err() {
+        return Err(LbdemError::field(
+            "pressure_diffusion.radius_min",
+            d.radius_min,
+            &format!(
+                "gives grains so light that the packing's DEM step ({:e}, the dissertation's, with its contact \
+                 stiffness) exceeds {CRITICAL_STEP_SAFETY} x their critical step",
+                spec.timestep
+            ),
+            "use larger grains (the dissertation's radii are 0.07-0.11 cm)",
+        ));
+    }
+    Ok(())
+}
+
 fn start(case: &Case<PressureDiffusion>, exec: &Exec) -> Result<DiffusionState> {
     let d = &case.scene.pressure_diffusion;
     let u = &case.setup.units;
     let h = u.spacing;
-    // The packing (physical units), by the dissertation's procedure.
-    let mut spec = PackingSpec::dissertation(d.width, d.height, 1.0, d.seed);
-    spec.radius_min = d.radius_min;
-    spec.radius_max = d.radius_max;
-    let packing = generate_packing(&spec, None)?;
+    let packing = generate_packing(&slab_packing(d), None)?;
     let world = packing.world;
     let (lo, hi) = world.bounds();
     // Lattice: Zou–He faces at the slab faces x = lo, hi; walls half a spacing outside the first/last rows.
@@ -589,6 +633,7 @@ impl Kind for PressureDiffusion {
             d.fluid_radius,
             "the dissertation uses 0.6-0.95",
         )?;
+        check_slab_packing(d)?;
         if d.fourier_times.is_empty()
             || d.fourier_times
                 .iter()

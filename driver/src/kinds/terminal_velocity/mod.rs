@@ -478,6 +478,7 @@ impl Kind for TerminalVelocity {
                 "run for many viscous times of the box (thousands of steps)",
             ));
         }
+        scene.output.budget(u.timestep, steps)?;
         let mut b = Budget::new();
         limits::lattice(
             &mut b,

@@ -992,6 +992,10 @@ impl Kind for Terzaghi {
             "the lattice height",
             ((c.height + 2.0 * free) / u.spacing).ceil() + 2.0,
         )?;
+        // The run takes at least 10 fluid steps (`start`), and records a profile every `record_every` of them.
+        let steps = steps.max(10);
+        scene.output.budget(u.timestep, steps)?;
+        let record_every = (u.time_to_steps(c.record_interval).round() as u64).max(1);
         let mut b = Budget::new();
         b.note(format!(
             "DEM critical step {critical:.4e}: {substeps} DEM sub-step(s) per fluid step"
@@ -999,6 +1003,13 @@ impl Kind for Terzaghi {
         // Two lattices: the Darcy run's and the consolidation's.
         limits::lattice(&mut b, "terzaghi.width", "lattices", nx, 2 * ny, 8, true)?;
         b.add_items("grains", "terzaghi.width", grains, limits::GRAIN_BYTES)?;
+        // A pore-pressure profile per record: (depth, p) per lattice row (at most `ny`) and its header.
+        b.add_items(
+            "pore-pressure profiles",
+            "terzaghi.record_interval",
+            limits::records_every(steps, record_every),
+            limits::mul("terzaghi.height", "a profile's size", ny, 16)?.saturating_add(64),
+        )?;
         Ok(b)
     }
 
