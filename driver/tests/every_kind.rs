@@ -203,6 +203,20 @@ checkpoint_interval = 50
     ]
 }
 
+/// The tables of the tiny scenes with no data row yet at the hold (only the header), each with its reason;
+/// every other table must hold a data row there.
+const HEADER_ONLY_AT_THE_HOLD: &[(&str, &str)] = &[
+    // Profiles are recorded at the Fourier times of the drainage, after the Darcy run, which step 200 is in.
+    ("pressure_diffusion", "profiles.csv"),
+    // Profiles are recorded from the load step on, after the Darcy run, which step 3000 is in.
+    ("terzaghi", "profiles.csv"),
+    // Events: a row per broken bond; none has broken by the hold.
+    ("dry", "broken_bonds.csv"),
+    ("fracture", "breaks.csv"),
+    // The fracture traces, found from the broken bonds: none yet.
+    ("fracture", "fractures.csv"),
+];
+
 /// The scene with a periodic checkpoint after every chunk (`[run] checkpoint_interval = 1` step), so that a run
 /// held at any step has written at least one periodic checkpoint.
 fn checkpoint_every_chunk(text: &str) -> String {
@@ -330,9 +344,13 @@ fn every_kind_stops_on_a_signal_and_resumes_to_identical_outputs() {
         assert_eq!(tables, named(&whole, ".csv"), "{kind}: tables at the hold");
         for t in &tables {
             let text = std::fs::read_to_string(cut.join(t)).unwrap();
+            // A header, and a data row for every table that has one by the hold.
+            let header_only = HEADER_ONLY_AT_THE_HOLD.contains(&(kind, t.as_str()));
+            let least = if header_only { 1 } else { 2 };
             assert!(
-                text.lines().count() >= 1,
-                "{kind}: {t} is empty at the hold"
+                text.lines().count() >= least,
+                "{kind}: {t} has {} line(s) at the hold, at least {least} expected:\n{text}",
+                text.lines().count()
             );
         }
         let figures: Vec<String> = named(&cut, ".png")
