@@ -407,9 +407,18 @@ pub fn records_every(total: u64, every: u64) -> u64 {
     (total / every.max(1)).saturating_add(2)
 }
 
+/// Whether a fluid lattice carries the coverage of solids (the partially-saturated coupling's per-node data).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Solids {
+    /// Plain fluid.
+    None,
+    /// Nodes covered by solids (discs, grains).
+    Covered,
+}
+
 /// Add a fluid lattice of `nx × ny` nodes in precision `float_bytes` (4 or 8) to `budget`, refusing a lattice
-/// whose node count does not fit the kernels' 32-bit node indices. `psm`: the lattice carries the coverage of
-/// the partially-saturated coupling.
+/// whose node count does not fit the kernels' 32-bit node indices; `solids` tells whether it carries the
+/// coverage of the partially-saturated coupling.
 pub fn lattice(
     budget: &mut Budget,
     field: &str,
@@ -417,7 +426,7 @@ pub fn lattice(
     nx: u64,
     ny: u64,
     float_bytes: u64,
-    psm: bool,
+    solids: Solids,
 ) -> Result<()> {
     let shape = usize::try_from(nx)
         .ok()
@@ -440,8 +449,11 @@ pub fn lattice(
     let populations = (shape.buffer_len() as u64)
         .checked_mul(2 * float_bytes)
         .and_then(|b| b.checked_add(2 * 4096));
-    let per_node =
-        node_extra_bytes(float_bytes) + if psm { coverage_bytes(float_bytes) } else { 0 };
+    let per_node = node_extra_bytes(float_bytes)
+        + match solids {
+            Solids::Covered => coverage_bytes(float_bytes),
+            Solids::None => 0,
+        };
     let bytes = nx
         .checked_mul(ny)
         .and_then(|n| n.checked_mul(per_node))
@@ -479,11 +491,20 @@ mod tests {
     #[test]
     fn a_lattice_beyond_32_bit_node_indices_is_refused_and_the_budget_names_the_largest_part() {
         let mut b = Budget::new();
-        let e = lattice(&mut b, "demo.nx", "lattice", 1 << 20, 1 << 20, 8, false).unwrap_err();
+        let e = lattice(
+            &mut b,
+            "demo.nx",
+            "lattice",
+            1 << 20,
+            1 << 20,
+            8,
+            Solids::None,
+        )
+        .unwrap_err();
         assert!(e.to_string().contains("`demo.nx`"), "{e}");
-        let e = lattice(&mut b, "demo.nx", "lattice", 0, 5, 8, false).unwrap_err();
+        let e = lattice(&mut b, "demo.nx", "lattice", 0, 5, 8, Solids::None).unwrap_err();
         assert!(e.to_string().contains("at least one node"), "{e}");
-        lattice(&mut b, "demo.nx", "lattice", 100, 100, 8, true).unwrap();
+        lattice(&mut b, "demo.nx", "lattice", 100, 100, 8, Solids::Covered).unwrap();
         // Two-lattice populations (2 × 9 × 8 bytes per node, padded) and the per-node extras.
         assert!(b.bytes() > 100 * 100 * 144, "{}", b.bytes());
         b.add_items("grains", "packing.width", 1000, GRAIN_BYTES)

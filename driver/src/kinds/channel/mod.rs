@@ -615,7 +615,7 @@ impl Kind for Channel {
             setup.nx as u64,
             setup.ny as u64,
             scene.scene.precision.float_bytes(),
-            false,
+            limits::Solids::None,
         )?;
         Ok(b)
     }

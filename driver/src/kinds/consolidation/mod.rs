@@ -395,7 +395,15 @@ impl Kind for Consolidation {
             limits::MAX_SUBSTEPS,
             steps.saturating_mul(substeps)
         ));
-        limits::lattice(&mut b, "consolidation.columns", "lattice", nx, ny, 8, true)?;
+        limits::lattice(
+            &mut b,
+            "consolidation.columns",
+            "lattice",
+            nx,
+            ny,
+            8,
+            limits::Solids::Covered,
+        )?;
         b.add_items(
             "grains",
             "consolidation.columns",

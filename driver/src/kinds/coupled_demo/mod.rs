@@ -286,7 +286,7 @@ impl Kind for CoupledDemo {
             d.nx as u64,
             d.ny as u64,
             8,
-            true,
+            limits::Solids::Covered,
         )?;
         // One row of series.csv per record interval, kept in the state.
         let rows = d.steps.div_ceil(d.record_interval);

@@ -433,7 +433,7 @@ impl ArraySetup {
             l as u64,
             l as u64,
             8,
-            true,
+            limits::Solids::Covered,
         )?;
         let mut warnings = Warnings::default();
         check_tau(&units, &mut warnings);
@@ -630,7 +630,7 @@ impl Kind for CylinderArray {
                 c.cell as u64,
                 c.cell as u64,
                 scene.scene.precision.float_bytes(),
-                true,
+                limits::Solids::Covered,
             )?;
         }
         Ok(b)

@@ -452,7 +452,7 @@ impl Kind for FluidCompressibility {
             nx,
             ny,
             8,
-            true,
+            limits::Solids::Covered,
         )?;
         Ok(b)
     }

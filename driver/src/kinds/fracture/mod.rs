@@ -1538,7 +1538,7 @@ impl Kind for FractureTest {
                 f.nodes[0] as u64,
                 f.nodes[1] as u64,
                 8,
-                true,
+                limits::Solids::Covered,
             )?;
         }
         // Records and snapshots after the drop, at the steps of `FractureRun::intervals` (plus those at the drop

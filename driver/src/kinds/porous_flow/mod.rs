@@ -609,7 +609,7 @@ impl PorousSetup {
                 nx as u64,
                 ny as u64,
                 precision.float_bytes(),
-                true,
+                limits::Solids::Covered,
             )?;
             b.add_items(
                 "discs",
@@ -662,7 +662,15 @@ impl PorousSetup {
         }
         let (nx, ny) = lattice_size(p.columns as u64, p.rows as u64, pitch as u64, buffer as u64)?;
         let mut probe = Budget::new();
-        limits::lattice(&mut probe, "porous.columns", "lattice", nx, ny, 8, true)?;
+        limits::lattice(
+            &mut probe,
+            "porous.columns",
+            "lattice",
+            nx,
+            ny,
+            8,
+            limits::Solids::Covered,
+        )?;
         let mut warnings = Warnings::default();
         check_tau(&units, &mut warnings);
         let mut cases = Vec::new();

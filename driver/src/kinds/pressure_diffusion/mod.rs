@@ -696,7 +696,7 @@ impl Kind for PressureDiffusion {
             nx.saturating_add(1),
             ny.max(1),
             8,
-            true,
+            limits::Solids::Covered,
         )?;
         limits::lattice(
             &mut b,
@@ -705,7 +705,7 @@ impl Kind for PressureDiffusion {
             nx.saturating_add(1),
             ny.max(1),
             8,
-            true,
+            limits::Solids::Covered,
         )?;
         b.add_items("grains", "pressure_diffusion.width", grains, GRAIN_BYTES)?;
         let fo_max = d.fourier_times.iter().copied().fold(0.0, f64::max);

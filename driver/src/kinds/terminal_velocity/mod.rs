@@ -487,7 +487,7 @@ impl Kind for TerminalVelocity {
             n,
             n,
             8,
-            true,
+            limits::Solids::Covered,
         )?;
         // The probe lattice of the start-up, and the records of the averaging window (one per step at most).
         limits::lattice(
@@ -497,7 +497,7 @@ impl Kind for TerminalVelocity {
             n,
             n,
             8,
-            true,
+            limits::Solids::Covered,
         )?;
         b.add_items("records", "terminal_velocity.duration", steps, 64)?;
         Ok(b)

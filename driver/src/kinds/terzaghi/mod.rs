@@ -1001,7 +1001,15 @@ impl Kind for Terzaghi {
             "DEM critical step {critical:.4e}: {substeps} DEM sub-step(s) per fluid step"
         ));
         // Two lattices: the Darcy run's and the consolidation's.
-        limits::lattice(&mut b, "terzaghi.width", "lattices", nx, 2 * ny, 8, true)?;
+        limits::lattice(
+            &mut b,
+            "terzaghi.width",
+            "lattices",
+            nx,
+            2 * ny,
+            8,
+            limits::Solids::Covered,
+        )?;
         b.add_items("grains", "terzaghi.width", grains, limits::GRAIN_BYTES)?;
         // A pore-pressure profile per record: (depth, p) per lattice row (at most `ny`) and its header.
         b.add_items(
