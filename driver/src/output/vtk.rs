@@ -930,7 +930,7 @@ impl LatticeFrame {
             origin: [0.0; 2],
             spacing: 1.0,
             velocity: 1.0,
-            pressure: 1.0 / 3.0,
+            pressure: crate::units::CS2,
             reference_density: 1.0,
         }
     }
