@@ -43,7 +43,7 @@ fn edit(text: &str, edits: &[(&str, &str)]) -> String {
 }
 
 /// A tiny scene of every kind, and the step to interrupt it at.
-fn tiny_scenes() -> Vec<(&'static str, String, u64)> {
+pub(crate) fn tiny_scenes() -> Vec<(&'static str, String, u64)> {
     let channel = r#"
 [scene]
 kind = "channel"

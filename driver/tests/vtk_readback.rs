@@ -95,13 +95,15 @@ fn runs() -> &'static [(&'static str, PathBuf)] {
         // covers the ΩΛ files.
         let demo = "[scene]\nkind = \"coupled_demo\"\n[demo]\nnx = 32\nny = 32\ntau = 2.2\ndiscs = 3\n\
                     radius = 4.0\nspeed = 0.01\nsteps = 200\nrecord_interval = 10\n";
-        let terminal = edit(
-            &bundled("terminal_velocity.toml"),
-            &[
-                ("cell = 0.44 ", "cell = 0.198 "),
-                ("duration = 0.605", "duration = 0.1452"),
-            ],
-        );
+        // The tiny scenes of `every_kind.rs` where the two tests need the same ones.
+        let tiny = crate::every_kind::tiny_scenes();
+        let tiny = |kind: &str| {
+            tiny.iter()
+                .find(|t| t.0 == kind)
+                .map(|t| t.1.clone())
+                .unwrap_or_else(|| panic!("every_kind has no tiny {kind} scene"))
+        };
+        let terminal = tiny("terminal_velocity");
         let consolidation = edit(
             &bundled("consolidation.toml"),
             &[
@@ -120,28 +122,12 @@ fn runs() -> &'static [(&'static str, PathBuf)] {
         );
         // The kinds whose grains are held fixed in the fluid: the tiny scenes of `every_kind.rs` (two cases of a
         // sweep each; the drainage's two profiles).
-        let cylinder_array = "[scene]\nkind = \"cylinder_array\"\nunits = \"cgs\"\n[fluid]\ndensity = 1.0\n\
-                              viscosity = 0.1\nspacing = 0.01\ntau = 0.8\n[cylinder_array]\ncell = 0.16\n\
-                              solid_fractions = [0.2, 0.4]\nacceleration = 0.5\n[run]\nsteps = 400\n\
-                              steady_tolerance = 1e-14\ncheck_interval = 100\n";
-        let porous_flow = "[scene]\nkind = \"porous_flow\"\nunits = \"cgs\"\n[fluid]\ndensity = 1.0\n\
-                           viscosity = 0.1\nspacing = 0.01\ntau = 0.8\n[porous]\ncolumns = 4\nrows = 1\n\
-                           pitch = 0.1\ndiameters = [0.06]\npressure_drops = [0.005, 0.01]\n[run]\nsteps = 300\n\
-                           steady_tolerance = 1e-14\ncheck_interval = 100\n";
-        let diffusion = edit(
-            &bundled("pressure_diffusion.toml"),
-            &[
-                ("width = 2.4 ", "width = 1.0 "),
-                ("height = 0.8 ", "height = 0.5 "),
-                (
-                    "fourier_times = [0.05, 0.1, 0.2, 0.35, 0.6, 1.0, 1.6]",
-                    "fourier_times = [0.05, 0.2]",
-                ),
-            ],
-        );
+        let cylinder_array = tiny("cylinder_array");
+        let porous_flow = tiny("porous_flow");
+        let diffusion = tiny("pressure_diffusion");
         vec![
-            ("cylinder_array", run("cylinder_array", cylinder_array)),
-            ("porous_flow", run("porous_flow", porous_flow)),
+            ("cylinder_array", run("cylinder_array", &cylinder_array)),
+            ("porous_flow", run("porous_flow", &porous_flow)),
             ("pressure_diffusion", run("pressure_diffusion", &diffusion)),
             ("fracture", run("fracture", &fracture)),
             ("dry", run("dry", &dry)),
