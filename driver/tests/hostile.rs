@@ -726,19 +726,7 @@ fn a_non_finite_result_exits_non_zero_from_the_command_line_with_the_summary() {
 fn seeds() -> &'static [Vec<String>] {
     static SEEDS: std::sync::OnceLock<Vec<Vec<String>>> = std::sync::OnceLock::new();
     SEEDS.get_or_init(|| {
-        fn walk(dir: &Path, out: &mut Vec<PathBuf>) {
-            for e in std::fs::read_dir(dir).unwrap() {
-                let p = e.unwrap().path();
-                if p.is_dir() {
-                    walk(&p, out);
-                } else if p.extension().is_some_and(|e| e == "toml") {
-                    out.push(p);
-                }
-            }
-        }
-        let mut files = Vec::new();
-        walk(Path::new(SCENES), &mut files);
-        files.sort();
+        let files = crate::common::files_with_extension(Path::new(SCENES), "toml");
         let mut by_kind: std::collections::BTreeMap<String, Vec<String>> = Default::default();
         let texts = files
             .iter()
@@ -763,18 +751,7 @@ fn the_fuzzer_seeds_are_every_bundled_scene_by_kind() {
     // Every kind of the registry has seeds.
     assert_eq!(seeds.len(), lbdem::kinds::REGISTRY.len());
     let all: usize = seeds.iter().map(Vec::len).sum();
-    let mut files = 0;
-    let mut dirs = vec![PathBuf::from(SCENES)];
-    while let Some(d) = dirs.pop() {
-        for e in std::fs::read_dir(d).unwrap() {
-            let p = e.unwrap().path();
-            if p.is_dir() {
-                dirs.push(p);
-            } else if p.extension().is_some_and(|e| e == "toml") {
-                files += 1;
-            }
-        }
-    }
+    let files = crate::common::files_with_extension(Path::new(SCENES), "toml").len();
     // The scenes of the subfolders (scenes/fracture/quick/, scenes/fracture/storage/) included, and the demo.
     assert_eq!(all, files + 1);
     assert!(seeds

@@ -7,6 +7,25 @@ pub mod tweaked_demo;
 use lbdem::engine::exec::Exec;
 use lbdem::kinds::channel::{simulate, Channel, ChannelOutcome, ChannelScene};
 use lbdem::run::Case;
+use std::path::{Path, PathBuf};
+
+/// Every file under `dir` (recursively) whose extension is `ext`, sorted.
+pub fn files_with_extension(dir: &Path, ext: &str) -> Vec<PathBuf> {
+    fn walk(dir: &Path, ext: &str, out: &mut Vec<PathBuf>) {
+        for entry in std::fs::read_dir(dir).unwrap() {
+            let p = entry.unwrap().path();
+            if p.is_dir() {
+                walk(&p, ext, out);
+            } else if p.extension().is_some_and(|e| e == ext) {
+                out.push(p);
+            }
+        }
+    }
+    let mut out = Vec::new();
+    walk(dir, ext, &mut out);
+    out.sort();
+    out
+}
 
 /// A channel scene written directly in lattice units (h = 1, Δt = 1, ρ₀ = 1, so ν = (τ − ½)/3 and a pressure
 /// of p is a lattice density change of 3p).
