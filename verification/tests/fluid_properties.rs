@@ -2008,8 +2008,9 @@ fn check_batched<T: Real>(seed: u64) -> Result<(), TestCaseError> {
         &shares,
         &links,
         &mut got_ex,
-        |k| f[k],
-        |k, g| {
+        &mut (),
+        |_, k| f[k],
+        |_, k, g| {
             got[k] = Some(g);
             stores[k] += 1;
         },

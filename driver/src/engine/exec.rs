@@ -15,7 +15,7 @@
 //! This module holds the driver's only `unsafe` code: the calls of the `#[target_feature]` functions, each
 //! made after checking that the CPU has the features. The same holds for the bulk pass of the in-place (AA)
 //! scheme, [`aa_bulk_exec`].
-use lbdem_kernels::fluid::aa::{aa_bulk_rows, AaStep};
+use lbdem_kernels::fluid::aa::{aa_bulk_rows, aa_bulk_rows_keeping, AaStep};
 use lbdem_kernels::fluid::collide::Collision;
 use lbdem_kernels::fluid::d2q9::Q;
 use lbdem_kernels::fluid::lattice::LatticeShape;
@@ -259,11 +259,44 @@ pub fn aa_bulk_exec<T: Real>(
     aa_bulk_rows(rows, step, params, collision);
 }
 
+/// [`aa_bulk_rows_keeping`] (the in-place bulk pass that leaves the nodes marked in `keep` as they were),
+/// compiled for `simd`; bitwise the same at every level.
+pub fn aa_bulk_keeping_exec<T: Real>(
+    simd: SimdLevel,
+    rows: &mut [[&mut [T]; Q]],
+    keep: &[bool],
+    step: AaStep,
+    params: &FluidParams<T>,
+    collision: &Collision<T>,
+) {
+    #[cfg(target_arch = "x86_64")]
+    {
+        if simd == SimdLevel::Avx512 && SimdLevel::Avx512.available() {
+            // SAFETY: the CPU has AVX-512 F/VL/DQ/BW (checked just above).
+            unsafe { x86::aa_keeping_avx512(rows, keep, step, params, collision) };
+            return;
+        }
+        if simd == SimdLevel::Avx2 && SimdLevel::Avx2.available() {
+            // SAFETY: the CPU has AVX2 (checked just above).
+            unsafe { x86::aa_keeping_avx2(rows, keep, step, params, collision) };
+            return;
+        }
+    }
+    let _ = simd;
+    aa_bulk_rows_keeping(rows, keep, step, params, collision);
+}
+
 /// Run `op` compiled for `simd`: `op` is inlined into a function carrying the level's `#[target_feature]`, so
 /// the kernels it calls (inlined in turn) are compiled with the level's vector instructions. Used for the
-/// partially-saturated collision of the covered nodes, whose per-node loops over the nine directions the
-/// compiler vectorises. Same bits at every level (see the module documentation). Falls back to the baseline
-/// level if `simd` is not available on this CPU.
+/// partially-saturated collision of the covered nodes, whose batches of [`PSM_LANES`] nodes the compiler
+/// vectorises across the lanes. Same bits at every level (see the module documentation). Falls back to the
+/// baseline level if `simd` is not available on this CPU.
+///
+/// **`op` must be an `#[inline(always)]` closure** (`with_simd(simd, #[inline(always)] || …)`): a large closure
+/// is otherwise left out of line, compiled once for the baseline level, and the `#[target_feature]` function
+/// only calls it (measured: until 2026-12-04 the covered nodes' collision ran in SSE2 at every level).
+///
+/// [`PSM_LANES`]: lbdem_kernels::fluid::collide::PSM_LANES
 #[inline(always)]
 pub fn with_simd<R>(simd: SimdLevel, op: impl FnOnce() -> R) -> R {
     #[cfg(target_arch = "x86_64")]
@@ -317,6 +350,30 @@ mod x86 {
         collision: &Collision<T>,
     ) {
         aa_bulk_rows(rows, step, params, collision);
+    }
+
+    /// [`aa_bulk_rows_keeping`] compiled for AVX2.
+    #[target_feature(enable = "avx2")]
+    pub(super) fn aa_keeping_avx2<T: Real>(
+        rows: &mut [[&mut [T]; Q]],
+        keep: &[bool],
+        step: AaStep,
+        params: &FluidParams<T>,
+        collision: &Collision<T>,
+    ) {
+        aa_bulk_rows_keeping(rows, keep, step, params, collision);
+    }
+
+    /// [`aa_bulk_rows_keeping`] compiled for AVX-512.
+    #[target_feature(enable = "avx512f,avx512vl,avx512dq,avx512bw")]
+    pub(super) fn aa_keeping_avx512<T: Real>(
+        rows: &mut [[&mut [T]; Q]],
+        keep: &[bool],
+        step: AaStep,
+        params: &FluidParams<T>,
+        collision: &Collision<T>,
+    ) {
+        aa_bulk_rows_keeping(rows, keep, step, params, collision);
     }
 
     /// [`bulk_band`] compiled for AVX2.

@@ -32,7 +32,9 @@ use rayon::prelude::*;
 use std::borrow::Cow;
 
 pub use crate::engine::exec::Streaming;
-use crate::engine::exec::{aa_bulk_exec, bulk_band_exec, with_simd, Exec, ExecTarget, SimdLevel};
+use crate::engine::exec::{
+    aa_bulk_exec, aa_bulk_keeping_exec, bulk_band_exec, with_simd, Exec, ExecTarget, SimdLevel,
+};
 use crate::error::{LbdemError, Result};
 
 mod persist;
@@ -81,20 +83,111 @@ pub struct FluidLattice<T: Real> {
 struct CoverScratch {
     bodies: Vec<BodyCells>,
     count: Vec<u32>,
-    /// Per node: fully covered (Σ ε ≥ 1); all false between calls.
-    full: Vec<bool>,
+    /// ΩΛ's open links of every node, kept up to date between calls.
+    links: LinkState,
+}
+
+/// ΩΛ's open links of **every** lattice node given the set of fully covered nodes, kept between re-mappings so that
+/// a re-mapping updates only the links of the neighbours of nodes whose full cover changed (a handful per step:
+/// grains move a thousandth of a spacing per step) instead of testing the eight neighbours of every covered node.
+/// The masks are exactly what [`open_links`] gives with the current flags and full set (tested against a fresh
+/// computation after every re-mapping of random moving bodies).
+#[derive(Default)]
+struct LinkState {
+    /// Whether `dense` and `full_list` describe the lattice's current flags and sides. Cleared by every change
+    /// that is not a re-mapping by [`FluidLattice::cover_with_bodies`] ([`compute_links`], new flags, a loaded
+    /// checkpoint, a coverage given cell by cell, a cleared coverage).
+    valid: bool,
+    /// Open links of each node (bit q: neighbour x + c_q inside the lattice, not an obstacle, not fully covered).
+    dense: Vec<OpenLinks>,
+    /// The fully covered nodes the masks were computed for, increasing.
+    full_list: Vec<u32>,
+    /// Per node scratch, all zero between calls: bit 0 "full before", bit 1 "full now".
+    marks: Vec<u8>,
+}
+
+impl LinkState {
+    /// Forget the masks (they are rebuilt at the next re-mapping).
+    fn invalidate(&mut self) {
+        self.valid = false;
+    }
+
+    /// Update the masks to the fully covered nodes `now` (increasing) and return them for the nodes `nodes`.
+    fn update<T: Real>(
+        &mut self,
+        shape: &LatticeShape,
+        bc: &Boundaries<T>,
+        flags: &[u8],
+        now: Vec<u32>,
+        nodes: &[u32],
+        out: &mut Vec<OpenLinks>,
+    ) {
+        let periodic = bc.periodic_axes();
+        if !self.valid || self.dense.len() != shape.nodes() {
+            // Every node's links with nothing fully covered; `now` is applied below as newly full.
+            self.dense.clear();
+            self.dense
+                .par_extend((0..shape.nodes()).into_par_iter().map(|n| {
+                    let (x, y) = shape.coords(n);
+                    open_links(shape, bc, flags, x, y, |_| false)
+                }));
+            self.full_list.clear();
+            self.marks.clear();
+            self.marks.resize(shape.nodes(), 0);
+            self.valid = true;
+        }
+        // Link q of node m looks at m + c_q; the nodes whose link q looks at n are n − c_q (one node, or none
+        // where that lies outside a side that is not periodic).
+        let set = |dense: &mut [OpenLinks], n: u32, open: bool| {
+            let (x, y) = shape.coords(n as usize);
+            for (q, &back) in OPPOSITE.iter().enumerate().skip(1) {
+                if let lbdem_kernels::fluid::lattice::Neighbour::Node(m) =
+                    shape.neighbour(x, y, back, periodic)
+                {
+                    if open {
+                        dense[m] |= 1 << q;
+                    } else {
+                        dense[m] &= !(1 << q);
+                    }
+                }
+            }
+        };
+        for &n in &self.full_list {
+            self.marks[n as usize] |= 1;
+        }
+        for &n in &now {
+            self.marks[n as usize] |= 2;
+        }
+        for &n in &self.full_list {
+            // No longer fully covered: its neighbours' links to it open again, unless it is an obstacle.
+            if self.marks[n as usize] == 1 && flags[n as usize] != SOLID {
+                set(&mut self.dense, n, true);
+            }
+        }
+        for &n in &now {
+            if self.marks[n as usize] == 2 {
+                set(&mut self.dense, n, false);
+            }
+        }
+        for &n in self.full_list.iter().chain(&now) {
+            self.marks[n as usize] = 0;
+        }
+        self.full_list = now;
+        let dense = &self.dense[..];
+        out.clear();
+        out.par_extend(nodes.par_iter().map(|&n| dense[n as usize]));
+    }
 }
 
 /// The cells one body covers: its cell range and, for every cell with a positive fraction, in increasing node
-/// order, the node, its fraction (for the geometry in `key`) and the node's coordinates. The body's rigid
-/// velocity at the nodes is evaluated where the shares are written (step 4 of
-/// [`FluidLattice::cover_with_bodies`]), not stored here.
+/// order, the node and its fraction (for the geometry in `key`). The node's coordinates and the body's rigid
+/// velocity there are evaluated where the shares are written (step 4 of [`FluidLattice::cover_with_bodies`]),
+/// not stored here.
 #[derive(Default)]
 struct BodyCells {
     key: Option<[u64; 6]>,
     range: Option<[usize; 4]>,
     fractions: Vec<(u32, f64)>,
-    points: Vec<[f64; 2]>,
     /// Scratch of the whole-ellipse kernel (`ellipse_grid_fractions`): fractions and boundary marks of the
     /// body's unclamped cell block.
     grid_fractions: Vec<f64>,
@@ -138,7 +231,6 @@ impl BodyCells {
         bc: &Boundaries<T>,
     ) {
         self.fractions.clear();
-        self.points.clear();
         self.range = body_cell_range(body, s.nx, s.ny);
         let Some([x0, x1, y0, y1]) = self.range else {
             return;
@@ -161,7 +253,6 @@ impl BodyCells {
                 };
                 if frac > 0.0 {
                     self.fractions.push((s.index(x, y) as u32, frac));
-                    self.points.push([xf, yf]);
                 }
             }
         }
@@ -256,13 +347,16 @@ impl BodyCells {
                 continue;
             };
             let (ka, kb) = ((xa - x0 + gx).max(first), (xb - x0 + gx).min(last));
-            let yf = y as f64;
-            for k in ka..=kb {
-                let frac = self.grid_fractions[row + k];
+            if ka > kb {
+                continue;
+            }
+            // Node of block column k: the row's node of column ka, plus k − ka.
+            let node_ka = s.index(ka + x0 - gx, y) as u32;
+            let fr = &self.grid_fractions[row + ka..=row + kb];
+            self.fractions.reserve(fr.len());
+            for (k, &frac) in fr.iter().enumerate() {
                 if frac > 0.0 {
-                    let x = k + x0 - gx;
-                    self.fractions.push((s.index(x, y) as u32, frac));
-                    self.points.push([x as f64, yf]);
+                    self.fractions.push((node_ka + k as u32, frac));
                 }
             }
         }
@@ -393,16 +487,37 @@ struct Coverage<T> {
     links: Vec<OpenLinks>,
 }
 
-/// Fill `cov.links` from the coverage, the side conditions and the obstacle flags. `full` is a per-node
-/// scratch map, all false on entry and on return.
+/// Whether covered node `k` of `cov` is fully covered for ΩΛ: the sum the collision forms (same order),
+/// compared as the collision compares it.
+fn node_is_full<T: Real>(cov: &Coverage<T>, k: usize) -> bool {
+    let mut eps = T::zero();
+    for s in &cov.shares[cov.offsets[k] as usize..cov.offsets[k + 1] as usize] {
+        eps += s.fraction;
+    }
+    lbdem_kernels::fluid::collide::lambda_fully_covered(eps)
+}
+
+/// The fully covered nodes of `cov` (increasing), for ΩΛ.
+fn full_nodes<T: Real>(cov: &Coverage<T>) -> Vec<u32> {
+    (0..cov.nodes.len())
+        .into_par_iter()
+        .filter(|&k| node_is_full(cov, k))
+        .map(|k| cov.nodes[k])
+        .collect()
+}
+
+/// Fill `cov.links` from the coverage, the side conditions and the obstacle flags, from scratch (every covered
+/// node's eight neighbours tested). `state`'s per-node scratch is used and left all zero; its kept masks are
+/// invalidated (the caller may have changed what they depend on).
 fn compute_links<T: Real>(
     cov: &mut Coverage<T>,
     shape: &LatticeShape,
     bc: &Boundaries<T>,
     flags: &[u8],
-    full: &mut Vec<bool>,
+    state: &mut LinkState,
     operator: SolidOperator,
 ) {
+    state.invalidate();
     if operator != SolidOperator::LambdaConsistent {
         // Only ΩΛ reads the masks: the other operators get "every link open" without the per-node pass, which
         // would otherwise run at every re-mapping of a coupled step.
@@ -410,29 +525,25 @@ fn compute_links<T: Real>(
         cov.links.resize(cov.nodes.len(), ALL_LINKS_OPEN);
         return;
     }
-    full.resize(shape.nodes(), false);
-    let is_full = |k: usize| -> bool {
-        // The sum the collision forms (same order), compared as the collision compares it.
-        let mut eps = T::zero();
-        for s in &cov.shares[cov.offsets[k] as usize..cov.offsets[k + 1] as usize] {
-            eps += s.fraction;
-        }
-        lbdem_kernels::fluid::collide::lambda_fully_covered(eps)
-    };
+    let full = &mut state.marks;
+    full.resize(shape.nodes(), 0);
     // Each node's test in parallel, the per-node map filled in node order, then each node's links in parallel
     // (each depends on the map only).
-    let node_full: Vec<bool> = (0..cov.nodes.len()).into_par_iter().map(is_full).collect();
+    let node_full: Vec<bool> = (0..cov.nodes.len())
+        .into_par_iter()
+        .map(|k| node_is_full(cov, k))
+        .collect();
     for (&n, &f) in cov.nodes.iter().zip(&node_full) {
-        full[n as usize] = f;
+        full[n as usize] = u8::from(f);
     }
     cov.links.clear();
     let full_map = &full[..];
     cov.links.par_extend(cov.nodes.par_iter().map(|&n| {
         let (x, y) = shape.coords(n as usize);
-        open_links(shape, bc, flags, x, y, |j| full_map[j])
+        open_links(shape, bc, flags, x, y, |j| full_map[j] != 0)
     }));
     for &n in &cov.nodes {
-        full[n as usize] = false;
+        full[n as usize] = 0;
     }
 }
 
@@ -648,9 +759,11 @@ impl<T: Real> FluidLattice<T> {
                 &self.shape,
                 &self.bc,
                 &self.flags,
-                &mut self.cover_scratch.full,
+                &mut self.cover_scratch.links,
                 self.solid_operator,
             );
+        } else {
+            self.cover_scratch.links.invalidate();
         }
     }
 
@@ -910,12 +1023,18 @@ impl<T: Real> FluidLattice<T> {
                 }
                 for &(body, i0, i1) in list {
                     let cells = &cells[body];
+                    // The node's coordinates, followed row by row (the cells are in node order).
+                    let (mut row, mut row_start) = (base / nx, base);
                     for i in i0..i1 {
                         let (node, frac) = cells.fractions[i];
                         let slot = &mut count[node as usize - base];
                         let at = *slot as usize;
                         *slot += 1;
-                        let p = cells.points[i];
+                        while node as usize >= row_start + nx {
+                            row += 1;
+                            row_start += nx;
+                        }
+                        let p = [(node as usize - row_start) as f64, row as f64];
                         let v = rigid_velocity(&bodies[body], Vector::from(p));
                         out.shares[at] = SolidShare {
                             fraction: T::lit(frac),
@@ -932,14 +1051,24 @@ impl<T: Real> FluidLattice<T> {
         drop(outs);
         cov.exchange.clear();
         cov.exchange.resize(total, [T::zero(); 2]);
-        compute_links(
-            &mut cov,
-            &s,
-            &bc,
-            &self.flags,
-            &mut scratch.full,
-            self.solid_operator,
-        );
+        if self.solid_operator == SolidOperator::LambdaConsistent {
+            // Only the neighbours of nodes whose full cover changed since the last call get new masks.
+            let now = full_nodes(&cov);
+            let mut links = std::mem::take(&mut cov.links);
+            scratch
+                .links
+                .update(&s, &bc, &self.flags, now, &cov.nodes, &mut links);
+            cov.links = links;
+        } else {
+            compute_links(
+                &mut cov,
+                &s,
+                &bc,
+                &self.flags,
+                &mut scratch.links,
+                self.solid_operator,
+            );
+        }
         self.coverage = Some(cov);
     }
 
@@ -1006,7 +1135,7 @@ impl<T: Real> FluidLattice<T> {
             &s,
             &self.bc,
             &self.flags,
-            &mut self.cover_scratch.full,
+            &mut self.cover_scratch.links,
             self.solid_operator,
         );
         self.coverage = Some(cov);
@@ -1277,21 +1406,25 @@ impl<T: Real> FluidLattice<T> {
             covered_vals.clear();
             if let Some(psm) = &psm {
                 let exchange = &mut *exchange;
-                with_simd(simd, || {
-                    for &k in covered_special.iter() {
-                        let (a, b) = (offsets[k] as usize, offsets[k + 1] as usize);
-                        covered_vals.push(covered_node_value(
-                            &domain,
-                            buf,
-                            layout,
-                            psm,
-                            covered[k] as usize,
-                            &shares[a..b],
-                            links[k],
-                            &mut exchange[a..b],
-                        ));
-                    }
-                });
+                with_simd(
+                    simd,
+                    #[inline(always)]
+                    || {
+                        for &k in covered_special.iter() {
+                            let (a, b) = (offsets[k] as usize, offsets[k + 1] as usize);
+                            covered_vals.push(covered_node_value(
+                                &domain,
+                                buf,
+                                layout,
+                                psm,
+                                covered[k] as usize,
+                                &shares[a..b],
+                                links[k],
+                                &mut exchange[a..b],
+                            ));
+                        }
+                    },
+                );
             }
         }
         // The covered nodes and their exchange entries, split along the bands of rows.
@@ -1335,43 +1468,63 @@ impl<T: Real> FluidLattice<T> {
                     let own = |k: usize| !mask[covered[k] as usize];
                     let (lo, hi) = (*lo, *hi);
                     let first = offsets[lo] as usize;
-                    // Row by row, so that a row's covered values stay in cache between their collision and
-                    // their store: the row's covered nodes collided from the row as it is, the bulk pass over
-                    // the row, then the covered values stored over what the bulk pass wrote for them.
-                    // At most one row's worth of nodes: one allocation per band per step.
-                    let mut held: Vec<(usize, [T; Q])> = Vec::with_capacity(nx);
+                    // Row by row: the bulk pass over the row leaving its covered nodes that are not special as
+                    // they were (`keep`), then those nodes gathered from the row the pass has just brought into
+                    // cache, collided with the partially-saturated operator and stored in place (each such node
+                    // reads and writes only places of its own).
+                    let mut keep = vec![false; nx];
                     let mut k0 = lo;
                     for r in 0..band.len() {
                         let y = y0 + r;
                         let row_end = ((y + 1) * nx) as u32;
-                        let k1 = k0 + covered[k0..hi].partition_point(|&n| n < row_end);
-                        held.clear();
-                        if let Some(psm) = &psm {
-                            if k1 > k0 {
-                                let rows = &*band;
-                                let ex = &mut ex[offsets[k0] as usize - first..];
-                                with_simd(simd, || {
-                                    collide_covered_list(
-                                        psm,
-                                        &offsets[k0..=k1],
-                                        shares,
-                                        &links[k0..k1],
-                                        ex,
-                                        |j| {
-                                            let k = k0 + j;
-                                            own(k).then(|| {
-                                                let n = covered[k] as usize;
-                                                load_from_rows(rows, kind, y0, n % nx, y)
-                                            })
-                                        },
-                                        |j, f| held.push((covered[k0 + j] as usize % nx, f)),
-                                    )
-                                })
-                            }
+                        let mut k1 = k0;
+                        while k1 < hi && covered[k1] < row_end {
+                            k1 += 1;
                         }
-                        aa_bulk_exec(simd, &mut band[r..r + 1], kind, &params, &collision);
-                        for (x, f) in &held {
-                            store_in_rows(band, kind, y0, *x, y, f);
+                        let row = &mut band[r..r + 1];
+                        match &psm {
+                            Some(psm) if k1 > k0 => {
+                                for k in k0..k1 {
+                                    keep[covered[k] as usize - y * nx] = own(k);
+                                }
+                                aa_bulk_keeping_exec(simd, row, &keep, kind, &params, &collision);
+                                let ex = &mut ex[offsets[k0] as usize - first..];
+                                with_simd(
+                                    simd,
+                                    #[inline(always)]
+                                    || {
+                                        collide_covered_list(
+                                            psm,
+                                            &offsets[k0..=k1],
+                                            shares,
+                                            &links[k0..k1],
+                                            ex,
+                                            row,
+                                            #[inline(always)]
+                                            |rows, j| {
+                                                let k = k0 + j;
+                                                // Not `bool::then` with a closure: that one was left out
+                                                // of line (a call and a stall per node).
+                                                if own(k) {
+                                                    let x = covered[k] as usize - y * nx;
+                                                    Some(load_from_rows(rows, kind, y, x, y))
+                                                } else {
+                                                    None
+                                                }
+                                            },
+                                            #[inline(always)]
+                                            |rows, j, f| {
+                                                let x = covered[k0 + j] as usize - y * nx;
+                                                store_in_rows(rows, kind, y, x, y, &f);
+                                            },
+                                        )
+                                    },
+                                );
+                                for k in k0..k1 {
+                                    keep[covered[k] as usize - y * nx] = false;
+                                }
+                            }
+                            _ => aa_bulk_exec(simd, row, kind, &params, &collision),
                         }
                         k0 = k1;
                     }
@@ -1513,11 +1666,15 @@ impl<T: Real> FluidLattice<T> {
                             shares,
                             links: &links[lo..hi],
                         };
-                        with_simd(simd, || {
-                            collide_covered_nodes(
-                                &domain, src, &mut band, y0, psm, covered, exchange,
-                            )
-                        });
+                        with_simd(
+                            simd,
+                            #[inline(always)]
+                            || {
+                                collide_covered_nodes(
+                                    &domain, src, &mut band, y0, psm, covered, exchange,
+                                )
+                            },
+                        );
                     }
                 }
             });
@@ -1804,7 +1961,31 @@ mod tests {
         }
     }
 
-    fn incremental_matches_from_scratch<T: Real>(bc: Boundaries<T>, seed: u64) {
+    /// ΩΛ's open links of the covered nodes computed here from nothing but the coverage (each node's fractions
+    /// summed and compared as the collision does, then [`open_links`] on that full map).
+    fn reference_links<T: Real>(l: &FluidLattice<T>) -> Vec<OpenLinks> {
+        let c = l.coverage.as_ref().unwrap();
+        let mut full = vec![false; l.shape.nodes()];
+        for (k, &n) in c.nodes.iter().enumerate() {
+            let eps = c.shares[c.offsets[k] as usize..c.offsets[k + 1] as usize]
+                .iter()
+                .fold(T::zero(), |e, s| e + s.fraction);
+            full[n as usize] = lbdem_kernels::fluid::collide::lambda_fully_covered(eps);
+        }
+        c.nodes
+            .iter()
+            .map(|&n| {
+                let (x, y) = l.shape.coords(n as usize);
+                open_links(&l.shape, &l.bc, &l.flags, x, y, |j| full[j])
+            })
+            .collect()
+    }
+
+    fn incremental_matches_from_scratch<T: Real>(
+        bc: Boundaries<T>,
+        seed: u64,
+        operator: SolidOperator,
+    ) {
         let (nx, ny) = (61, 47);
         let params = FluidParams {
             tau: T::lit(0.9),
@@ -1813,7 +1994,9 @@ mod tests {
         let mut incremental = FluidLattice::<T>::new(nx, ny, bc, params).unwrap();
         let mut scratch = FluidLattice::<T>::new(nx, ny, bc, params).unwrap();
         for l in [&mut incremental, &mut scratch] {
-            l.set_solid_operator(SolidOperator::MovingWallBounceBack);
+            // A few obstacle nodes, so that the open links meet them too.
+            l.set_solid(|x, y| (x * 7 + y * 3) % 97 == 0);
+            l.set_solid_operator(operator);
             l.fill_equilibrium(|x, y| {
                 (
                     T::one(),
@@ -1851,6 +2034,26 @@ mod tests {
                 bits(fresh) == expected,
                 "step {step}: from-scratch coverage differs from the reference"
             );
+            // ΩΛ's open links, kept up to date between calls, are those of a fresh computation.
+            if operator == SolidOperator::LambdaConsistent {
+                let want = reference_links(&incremental);
+                assert!(
+                    inc.links == want,
+                    "step {step}: incremental open links differ"
+                );
+                assert!(
+                    fresh.links == want,
+                    "step {step}: from-scratch open links differ"
+                );
+                assert!(incremental
+                    .cover_scratch
+                    .links
+                    .marks
+                    .iter()
+                    .all(|&m| m == 0));
+            } else {
+                assert!(inc.links.iter().all(|&m| m == ALL_LINKS_OPEN));
+            }
             // Counters are back to zero between calls.
             assert!(incremental.cover_scratch.count.iter().all(|&c| c == 0));
             shares += inc.shares.len();
@@ -1888,15 +2091,20 @@ mod tests {
             south: SideCondition::Wall,
             north: SideCondition::Wall,
         };
-        incremental_matches_from_scratch::<f64>(pressure_x, 1);
-        incremental_matches_from_scratch::<f64>(Boundaries::periodic(), 2);
         let pressure_x32 = Boundaries {
             west: SideCondition::Pressure { density: 1.01f32 },
             east: SideCondition::Pressure { density: 1.0 },
             south: SideCondition::Wall,
             north: SideCondition::Wall,
         };
-        incremental_matches_from_scratch::<f32>(pressure_x32, 3);
+        for op in [
+            SolidOperator::MovingWallBounceBack,
+            SolidOperator::LambdaConsistent,
+        ] {
+            incremental_matches_from_scratch::<f64>(pressure_x, 1, op);
+            incremental_matches_from_scratch::<f64>(Boundaries::periodic(), 2, op);
+            incremental_matches_from_scratch::<f32>(pressure_x32, 3, op);
+        }
     }
 
     /// The cell classifier that spares the exact area formula: every cell it calls inside gets exactly 1 from

@@ -190,6 +190,31 @@ pub fn plane_row(step: AaStep, p: usize, y: usize, ny: usize) -> usize {
 /// (wrapped), collides with `collide`, and writes its post-collision population of direction p̄ back there.
 #[inline(always)]
 pub fn scatter_row<T: Real, C: Fn(&mut [T; Q])>(rows: &mut [&mut [T]; Q], collide: &C) {
+    scatter_row_with(rows, collide, |_| false);
+}
+
+/// [`scatter_row`] that leaves the nodes x with `keep[x]` as they were: such a node writes back the nine values
+/// it gathered (so its slots still hold them after the pass, for a later pass to gather), every other node
+/// exactly what [`scatter_row`] writes. `keep` is `nx` long (a shorter mask is misuse: the pass then panics).
+#[inline(always)]
+pub fn scatter_row_keeping<T: Real, C: Fn(&mut [T; Q])>(
+    rows: &mut [&mut [T]; Q],
+    keep: &[bool],
+    collide: &C,
+) {
+    let nx = rows[0].len();
+    let keep = &keep[..nx];
+    scatter_row_with(rows, collide, |x| keep[x]);
+}
+
+/// The body of [`scatter_row`] and [`scatter_row_keeping`]: `kept(x)` says whether node x writes back what it
+/// gathered.
+#[inline(always)]
+fn scatter_row_with<T: Real, C: Fn(&mut [T; Q]), K: Fn(usize) -> bool>(
+    rows: &mut [&mut [T]; Q],
+    collide: &C,
+    kept: K,
+) {
     let nx = rows[0].len();
     if nx == 0 {
         return;
@@ -202,7 +227,15 @@ pub fn scatter_row<T: Real, C: Fn(&mut [T; Q])>(rows: &mut [&mut [T]; Q], collid
         }
         let at: [usize; Q] = core::array::from_fn(|p| scatter_column(p, x, nx));
         let mut f: [T; Q] = core::array::from_fn(|p| rows[p][at[p]]);
+        let gathered = f;
         collide(&mut f);
+        if kept(x) {
+            f = gathered;
+            for p in 0..Q {
+                rows[p][at[p]] = f[p];
+            }
+            continue;
+        }
         for p in 0..Q {
             rows[p][at[p]] = f[OPPOSITE[p]];
         }
@@ -223,19 +256,27 @@ pub fn scatter_row<T: Real, C: Fn(&mut [T; Q])>(rows: &mut [&mut [T]; Q], collid
     let s7 = &mut r7[2..2 + n];
     let s8 = &mut r8[..n];
     for k in 0..n {
-        let mut f = [
+        let g = [
             s0[k], s1[k], s2[k], s3[k], s4[k], s5[k], s6[k], s7[k], s8[k],
         ];
+        let mut f = g;
         collide(&mut f);
-        s0[k] = f[0];
-        s1[k] = f[3];
-        s2[k] = f[4];
-        s3[k] = f[1];
-        s4[k] = f[2];
-        s5[k] = f[7];
-        s6[k] = f[8];
-        s7[k] = f[5];
-        s8[k] = f[6];
+        // A kept node writes its gathered values back where it read them (slot p holds its population p);
+        // the others write population p̄ into slot p.
+        let out = if kept(1 + k) {
+            g
+        } else {
+            [f[0], f[3], f[4], f[1], f[2], f[7], f[8], f[5], f[6]]
+        };
+        s0[k] = out[0];
+        s1[k] = out[1];
+        s2[k] = out[2];
+        s3[k] = out[3];
+        s4[k] = out[4];
+        s5[k] = out[5];
+        s6[k] = out[6];
+        s7[k] = out[7];
+        s8[k] = out[8];
     }
 }
 
@@ -243,25 +284,55 @@ pub fn scatter_row<T: Real, C: Fn(&mut [T; Q])>(rows: &mut [&mut [T]; Q], collid
 /// population p into `rows[p][x]`.
 #[inline(always)]
 pub fn local_row<T: Real, C: Fn(&mut [T; Q])>(rows: &mut [&mut [T]; Q], collide: &C) {
+    local_row_with(rows, collide, |_| false);
+}
+
+/// [`local_row`] that leaves the nodes x with `keep[x]` as they were (see [`scatter_row_keeping`]). `keep` is
+/// `nx` long.
+#[inline(always)]
+pub fn local_row_keeping<T: Real, C: Fn(&mut [T; Q])>(
+    rows: &mut [&mut [T]; Q],
+    keep: &[bool],
+    collide: &C,
+) {
+    let nx = rows[0].len();
+    let keep = &keep[..nx];
+    local_row_with(rows, collide, |x| keep[x]);
+}
+
+/// The body of [`local_row`] and [`local_row_keeping`].
+#[inline(always)]
+fn local_row_with<T: Real, C: Fn(&mut [T; Q]), K: Fn(usize) -> bool>(
+    rows: &mut [&mut [T]; Q],
+    collide: &C,
+    kept: K,
+) {
     let nx = rows[0].len();
     let [r0, r1, r2, r3, r4, r5, r6, r7, r8] = rows;
     let (r1, r2, r3, r4) = (&mut r1[..nx], &mut r2[..nx], &mut r3[..nx], &mut r4[..nx]);
     let (r5, r6, r7, r8) = (&mut r5[..nx], &mut r6[..nx], &mut r7[..nx], &mut r8[..nx]);
     let r0 = &mut r0[..nx];
     for k in 0..nx {
-        let mut f = [
+        let g = [
             r0[k], r3[k], r4[k], r1[k], r2[k], r7[k], r8[k], r5[k], r6[k],
         ];
+        let mut f = g;
         collide(&mut f);
-        r0[k] = f[0];
-        r1[k] = f[1];
-        r2[k] = f[2];
-        r3[k] = f[3];
-        r4[k] = f[4];
-        r5[k] = f[5];
-        r6[k] = f[6];
-        r7[k] = f[7];
-        r8[k] = f[8];
+        // A kept node writes back slot by slot what it read there (slot p held its population p̄).
+        let out = if kept(k) {
+            [g[0], g[3], g[4], g[1], g[2], g[7], g[8], g[5], g[6]]
+        } else {
+            f
+        };
+        r0[k] = out[0];
+        r1[k] = out[1];
+        r2[k] = out[2];
+        r3[k] = out[3];
+        r4[k] = out[4];
+        r5[k] = out[5];
+        r6[k] = out[6];
+        r7[k] = out[7];
+        r8[k] = out[8];
     }
 }
 
@@ -289,7 +360,7 @@ fn scatter_column(p: usize, x: usize, nx: usize) -> usize {
 /// The populations node (x, y) gathers in the bulk pass of `step`, from a band of rows as [`plane_row`]
 /// describes it (`rows[y − y0]`). Right for every node that is not special: such a node's gather is the bulk
 /// pass's.
-#[inline]
+#[inline(always)]
 pub fn load_from_rows<T: Real>(
     rows: &[[&mut [T]; Q]],
     step: AaStep,
@@ -299,16 +370,32 @@ pub fn load_from_rows<T: Real>(
 ) -> [T; Q] {
     let r = &rows[y - y0];
     let nx = r[0].len();
+    // Written out (not `core::array::from_fn`, which the compiler left out of line in the covered nodes' pass).
     match step {
-        AaStep::Local => core::array::from_fn(|p| r[OPPOSITE[p]][x]),
-        AaStep::Scatter => core::array::from_fn(|p| r[p][scatter_column(p, x, nx)]),
+        AaStep::Local => [
+            r[0][x], r[3][x], r[4][x], r[1][x], r[2][x], r[7][x], r[8][x], r[5][x], r[6][x],
+        ],
+        AaStep::Scatter => {
+            let at = |p: usize| scatter_column(p, x, nx);
+            [
+                r[0][at(0)],
+                r[1][at(1)],
+                r[2][at(2)],
+                r[3][at(3)],
+                r[4][at(4)],
+                r[5][at(5)],
+                r[6][at(6)],
+                r[7][at(7)],
+                r[8][at(8)],
+            ]
+        }
     }
 }
 
 /// Store the post-collision populations `f` of node (x, y) at the places the bulk pass of `step` writes them,
 /// in a band of rows as [`plane_row`] describes it (`rows[y − y0]`). Right for every node that is not special
 /// (see [`super::step::classify_special_nodes`]): such a node's places are the bulk pass's.
-#[inline]
+#[inline(always)]
 pub fn store_in_rows<T: Real>(
     rows: &mut [[&mut [T]; Q]],
     step: AaStep,
@@ -357,6 +444,66 @@ pub fn aa_bulk_rows<T: Real>(
         (Collision::Trt(_), false) => {
             let c = |f: &mut [T; Q]| trt_collide(f, rates);
             aa_rows_with(rows, step, &c);
+        }
+    }
+}
+
+/// [`aa_bulk_rows`] that leaves the nodes marked in `keep` as they were: `keep[r * nx + x]` for node x of row r
+/// of the band (`rows.len() × nx` entries; shorter is misuse and panics). A kept node writes back the values it
+/// gathered, so its slots hold after the pass what they held before it; every other node gets exactly what
+/// [`aa_bulk_rows`] gives it. Lets a caller collide the kept (covered) nodes *after* the bulk pass from the rows
+/// the pass has just brought into cache, and store them in place.
+#[inline(always)]
+pub fn aa_bulk_rows_keeping<T: Real>(
+    rows: &mut [[&mut [T]; Q]],
+    keep: &[bool],
+    step: AaStep,
+    params: &FluidParams<T>,
+    collision: &Collision<T>,
+) {
+    let rates = collision.rates_unchecked(params.tau);
+    let omega = rates.plus;
+    let force = params.force;
+    match (collision, params.forced()) {
+        (Collision::Bgk, true) => {
+            let c = |f: &mut [T; Q]| bgk_collide_forced(f, omega, force);
+            aa_rows_keeping(rows, keep, step, &c);
+        }
+        (Collision::Bgk, false) => {
+            let c = |f: &mut [T; Q]| bgk_collide(f, omega);
+            aa_rows_keeping(rows, keep, step, &c);
+        }
+        (Collision::Trt(_), true) => {
+            let c = |f: &mut [T; Q]| trt_collide_forced(f, rates, force);
+            aa_rows_keeping(rows, keep, step, &c);
+        }
+        (Collision::Trt(_), false) => {
+            let c = |f: &mut [T; Q]| trt_collide(f, rates);
+            aa_rows_keeping(rows, keep, step, &c);
+        }
+    }
+}
+
+#[inline(always)]
+fn aa_rows_keeping<T: Real, C: Fn(&mut [T; Q])>(
+    rows: &mut [[&mut [T]; Q]],
+    keep: &[bool],
+    step: AaStep,
+    c: &C,
+) {
+    let Some(nx) = rows.first().map(|r| r[0].len()) else {
+        return;
+    };
+    match step {
+        AaStep::Scatter => {
+            for (r, row) in rows.iter_mut().enumerate() {
+                scatter_row_keeping(row, &keep[r * nx..(r + 1) * nx], c);
+            }
+        }
+        AaStep::Local => {
+            for (r, row) in rows.iter_mut().enumerate() {
+                local_row_keeping(row, &keep[r * nx..(r + 1) * nx], c);
+            }
         }
     }
 }

@@ -618,7 +618,8 @@ pub fn collide_covered_nodes<T: Real>(
         covered.shares,
         covered.links,
         exchange,
-        |k| {
+        dst,
+        |_, k| {
             let n = nodes[k] as usize;
             (flags[n] != SOLID).then(|| {
                 let (x, y) = shape.coords(n);
@@ -634,7 +635,7 @@ pub fn collide_covered_nodes<T: Real>(
                 )
             })
         },
-        |k, f| {
+        |dst, k, f| {
             let n = nodes[k] as usize;
             for q in 0..Q {
                 dst[q][n - base] = f[q];
@@ -654,24 +655,28 @@ pub fn collide_covered_nodes<T: Real>(
 }
 
 /// The partially-saturated collision of a list of covered nodes, batched: node k (0 ≤ k < `links.len()`) has
-/// the shares `shares[offsets[k] .. offsets[k + 1]]` (absolute indices) and open links `links[k]`; `load(k)`
-/// gives its gathered populations (`None`: the node is left alone, its exchange entries untouched), `store(k,
-/// f)` receives its post-collision populations, and `exchange` (entries from `offsets[0]` on) the momentum
-/// handed to each share.
+/// the shares `shares[offsets[k] .. offsets[k + 1]]` (absolute indices) and open links `links[k]`;
+/// `load(state, k)` gives its gathered populations (`None`: the node is left alone, its exchange entries
+/// untouched), `store(state, k, f)` receives its post-collision populations, and `exchange` (entries from
+/// `offsets[0]` on) the momentum handed to each share. Both closures reach the caller's `state` (e.g. the rows
+/// the nodes are gathered from and stored into, in place): a node's store may come before a later node's load,
+/// so in-place use needs nodes whose places are their own.
 ///
 /// The nodes with one share and ε > 0 (the common case: [`lane_class`]) are queued by kernel and collided
 /// [`PSM_LANES`] at a time by [`psm_collide_lanes`]; the others node by node by [`psm_collide_links`]. Every
 /// node gets bitwise what [`psm_collide_links`] gives it (the batch kernel runs the same functions on the same
 /// values); only the order in which `store` is called differs.
 #[inline(always)]
-pub fn collide_covered_list<T: Real>(
+#[allow(clippy::too_many_arguments)]
+pub fn collide_covered_list<T: Real, S: ?Sized>(
     params: &PsmParams<T>,
     offsets: &[u32],
     shares: &[SolidShare<T>],
     links: &[OpenLinks],
     exchange: &mut [[T; 2]],
-    mut load: impl FnMut(usize) -> Option<[T; Q]>,
-    mut store: impl FnMut(usize, [T; Q]),
+    state: &mut S,
+    mut load: impl FnMut(&S, usize) -> Option<[T; Q]>,
+    mut store: impl FnMut(&mut S, usize, [T; Q]),
 ) {
     let first = offsets.first().copied().unwrap_or(0) as usize;
     let mut queues: [LaneQueue<T>; 3] = core::array::from_fn(|_| LaneQueue {
@@ -690,7 +695,7 @@ pub fn collide_covered_list<T: Real>(
         LaneClass::LambdaFull,
     ];
     for k in 0..links.len() {
-        let Some(mut f) = load(k) else {
+        let Some(mut f) = load(state, k) else {
             continue;
         };
         let (a, b) = (offsets[k] as usize, offsets[k + 1] as usize);
@@ -707,7 +712,7 @@ pub fn collide_covered_list<T: Real>(
                 q.nodes[l] = k;
                 q.len += 1;
                 if q.len == PSM_LANES {
-                    q.flush(class, params, offsets, exchange, &mut store);
+                    q.flush(class, params, offsets, exchange, state, &mut store);
                 }
             }
             None => {
@@ -718,13 +723,13 @@ pub fn collide_covered_list<T: Real>(
                     links[k],
                     &mut exchange[a - first..b - first],
                 );
-                store(k, f);
+                store(state, k, f);
             }
         }
     }
     for (q, class) in queues.iter_mut().zip(CLASSES) {
         if q.len > 0 {
-            q.flush(class, params, offsets, exchange, &mut store);
+            q.flush(class, params, offsets, exchange, state, &mut store);
         }
     }
 }
@@ -739,13 +744,14 @@ struct LaneQueue<T> {
 impl<T: Real> LaneQueue<T> {
     /// Collide the first `len` lanes with the batch kernel `class` and hand the results out; empties the queue.
     #[inline(always)]
-    fn flush(
+    fn flush<S: ?Sized>(
         &mut self,
         class: LaneClass,
         params: &PsmParams<T>,
         offsets: &[u32],
         exchange: &mut [[T; 2]],
-        store: &mut impl FnMut(usize, [T; Q]),
+        state: &mut S,
+        store: &mut impl FnMut(&mut S, usize, [T; Q]),
     ) {
         let first = offsets.first().copied().unwrap_or(0) as usize;
         // Unused lanes repeat lane 0 (finite values; their results are dropped).
@@ -759,7 +765,7 @@ impl<T: Real> LaneQueue<T> {
         psm_collide_lanes(&mut self.lanes, PSM_LANES, params, class);
         for l in 0..self.len {
             let k = self.nodes[l];
-            store(k, core::array::from_fn(|p| self.lanes.f[p][l]));
+            store(state, k, core::array::from_fn(|p| self.lanes.f[p][l]));
             exchange[offsets[k] as usize - first] = self.lanes.exchange[l];
         }
         self.len = 0;
