@@ -102,7 +102,9 @@ struct LinkState {
     dense: Vec<OpenLinks>,
     /// The fully covered nodes the masks were computed for, increasing.
     full_list: Vec<u32>,
-    /// Per node scratch, all zero between calls: bit 0 "full before", bit 1 "full now".
+    /// The list before that (its allocation reused for the next one).
+    spare: Vec<u32>,
+    /// Per node scratch of [`compute_links`], all zero between calls.
     marks: Vec<u8>,
 }
 
@@ -132,8 +134,6 @@ impl LinkState {
                     open_links(shape, bc, flags, x, y, |_| false)
                 }));
             self.full_list.clear();
-            self.marks.clear();
-            self.marks.resize(shape.nodes(), 0);
             self.valid = true;
         }
         // Link q of node m looks at m + c_q; the nodes whose link q looks at n are n − c_q (one node, or none
@@ -152,27 +152,31 @@ impl LinkState {
                 }
             }
         };
-        for &n in &self.full_list {
-            self.marks[n as usize] |= 1;
-        }
-        for &n in &now {
-            self.marks[n as usize] |= 2;
-        }
-        for &n in &self.full_list {
-            // No longer fully covered: its neighbours' links to it open again, unless it is an obstacle.
-            if self.marks[n as usize] == 1 && flags[n as usize] != SOLID {
-                set(&mut self.dense, n, true);
+        // Both lists increase: one merge finds the nodes that left the set and those that joined it.
+        let (old, mut i, mut j) = (&self.full_list, 0, 0);
+        while i < old.len() || j < now.len() {
+            match (old.get(i), now.get(j)) {
+                (Some(&a), Some(&b)) if a == b => {
+                    i += 1;
+                    j += 1;
+                }
+                (Some(&a), b) if b.is_none_or(|&b| a < b) => {
+                    // No longer fully covered: its neighbours' links to it open again, unless it is an
+                    // obstacle.
+                    if flags[a as usize] != SOLID {
+                        set(&mut self.dense, a, true);
+                    }
+                    i += 1;
+                }
+                (_, Some(&b)) => {
+                    set(&mut self.dense, b, false);
+                    j += 1;
+                }
+                // (None, None): the loop condition excludes it.
+                _ => break,
             }
         }
-        for &n in &now {
-            if self.marks[n as usize] == 2 {
-                set(&mut self.dense, n, false);
-            }
-        }
-        for &n in self.full_list.iter().chain(&now) {
-            self.marks[n as usize] = 0;
-        }
-        self.full_list = now;
+        self.spare = std::mem::replace(&mut self.full_list, now);
         let dense = &self.dense[..];
         out.clear();
         out.par_extend(nodes.par_iter().map(|&n| dense[n as usize]));
@@ -495,15 +499,6 @@ fn node_is_full<T: Real>(cov: &Coverage<T>, k: usize) -> bool {
         eps += s.fraction;
     }
     lbdem_kernels::fluid::collide::lambda_fully_covered(eps)
-}
-
-/// The fully covered nodes of `cov` (increasing), for ΩΛ.
-fn full_nodes<T: Real>(cov: &Coverage<T>) -> Vec<u32> {
-    (0..cov.nodes.len())
-        .into_par_iter()
-        .filter(|&k| node_is_full(cov, k))
-        .map(|k| cov.nodes[k])
-        .collect()
 }
 
 /// Fill `cov.links` from the coverage, the side conditions and the obstacle flags, from scratch (every covered
@@ -966,7 +961,10 @@ impl<T: Real> FluidLattice<T> {
             owners: &'a mut [u32],
             share_nodes: &'a mut [[f64; 2]],
             first_share: u32,
+            /// ΩΛ only: the band's fully covered nodes, increasing.
+            full: Vec<u32>,
         }
+        let lambda = self.solid_operator == SolidOperator::LambdaConsistent;
         let mut outs: Vec<BandOut<'_, T>> = Vec::with_capacity(bands);
         {
             let (mut nodes, mut offsets) = (&mut cov.nodes[..], &mut cov.offsets[..total_nodes]);
@@ -994,6 +992,7 @@ impl<T: Real> FluidLattice<T> {
                     owners: ow,
                     share_nodes: sn,
                     first_share,
+                    full: Vec::new(),
                 });
                 first_share += m as u32;
             }
@@ -1047,17 +1046,41 @@ impl<T: Real> FluidLattice<T> {
                 for &n in out.nodes.iter() {
                     count[n as usize - base] = 0;
                 }
+                if lambda {
+                    // The band's fully covered nodes, from the shares just written (their sum in the
+                    // collision's order, compared as the collision compares it).
+                    let first = out.first_share as usize;
+                    for (k, &n) in out.nodes.iter().enumerate() {
+                        let a = out.offsets[k] as usize - first;
+                        let b = out
+                            .offsets
+                            .get(k + 1)
+                            .map_or(out.shares.len(), |&o| o as usize - first);
+                        let mut eps = T::zero();
+                        for sh in &out.shares[a..b] {
+                            eps += sh.fraction;
+                        }
+                        if lbdem_kernels::fluid::collide::lambda_fully_covered(eps) {
+                            out.full.push(n);
+                        }
+                    }
+                }
             });
+        // Into the buffer the previous call's list left (no fresh allocation per call).
+        let mut full_now = std::mem::take(&mut scratch.links.spare);
+        full_now.clear();
+        for o in &outs {
+            full_now.extend_from_slice(&o.full);
+        }
         drop(outs);
         cov.exchange.clear();
         cov.exchange.resize(total, [T::zero(); 2]);
-        if self.solid_operator == SolidOperator::LambdaConsistent {
+        if lambda {
             // Only the neighbours of nodes whose full cover changed since the last call get new masks.
-            let now = full_nodes(&cov);
             let mut links = std::mem::take(&mut cov.links);
             scratch
                 .links
-                .update(&s, &bc, &self.flags, now, &cov.nodes, &mut links);
+                .update(&s, &bc, &self.flags, full_now, &cov.nodes, &mut links);
             cov.links = links;
         } else {
             compute_links(
