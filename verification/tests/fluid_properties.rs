@@ -17,6 +17,7 @@
 //!   Whole steps are single steps, so errors do not compound.
 //! * Bitwise (`to_bits`) where the claim is exact: PSM with ε = 0 versus BGK, streaming as a permutation,
 //!   band splitting.
+use lbdem_kernels::fluid::aa::{load_from_rows, store_in_rows, AaStep};
 use lbdem_kernels::fluid::boundary::{
     zou_he, zou_he_corner, Boundaries, SideCondition, SideProfiles,
 };
@@ -28,9 +29,9 @@ use lbdem_kernels::fluid::collide::{
 use lbdem_kernels::fluid::d2q9::{density, equilibrium, momentum, second_moment, OPPOSITE, Q};
 use lbdem_kernels::fluid::lattice::{LatticeShape, Side};
 use lbdem_kernels::fluid::step::{
-    band_mut, classify_special_nodes, collide_covered_list, collide_covered_nodes, gather_node,
-    gathered_moments, nodes_in_rows, open_links, planes, planes_mut, step_band, stream_periodic,
-    CoveredNodes, Domain, FluidParams, FLUID, SOLID,
+    band_mut, classify_special_nodes, collide_covered_list, collide_covered_nodes,
+    collide_covered_row, gather_node, gathered_moments, nodes_in_rows, open_links, planes,
+    planes_mut, step_band, stream_periodic, CoveredNodes, Domain, FluidParams, FLUID, SOLID,
 };
 use lbdem_kernels::Real;
 use lbdem_reference::analytic;
@@ -2030,8 +2031,156 @@ fn check_batched<T: Real>(seed: u64) -> Result<(), TestCaseError> {
     Ok(())
 }
 
+/// [`collide_covered_row`] (the in-place covered nodes of one AA pass row: contiguous runs of one batch kernel
+/// loaded and stored plane by plane, the rest queued) against node by node [`load_from_rows`],
+/// [`psm_collide_links`], [`store_in_rows`], in precision `T`, either AA step: the same bits for every slot of
+/// the row and every exchange entry; special nodes (`own` false) and their entries untouched. Half the cases
+/// give long stretches of nodes one batch kernel (fully covered, or one partial fraction) in consecutive
+/// columns, so that the contiguous path runs, with gaps, edge columns and skipped nodes between them.
+fn check_row<T: Real>(seed: u64) -> Result<(), TestCaseError> {
+    let (p, _, offsets, mut shares, links) = random_covered_list(seed);
+    let mut rng = SplitMix(seed ^ 0x5EED);
+    let n = links.len();
+    if rng.chance(0.5) {
+        // Stretches of one kernel: every single share of a stretch fully covered, or one fraction.
+        let mut k = 0;
+        while k < n {
+            let len = 1 + rng.below(20);
+            let frac = if rng.chance(0.5) {
+                1.0
+            } else {
+                rng.range(0.05, 0.95)
+            };
+            for j in k..(k + len).min(n) {
+                let (a, b) = (offsets[j] as usize, offsets[j + 1] as usize);
+                if b == a + 1 && !rng.chance(0.05) {
+                    shares[a].fraction = frac;
+                }
+            }
+            k += len;
+        }
+    }
+    // Columns: increasing, mostly consecutive, from 0 or 1; the row one or two columns longer.
+    let mut columns = Vec::with_capacity(n);
+    let mut x = rng.below(2) as u32;
+    for _ in 0..n {
+        columns.push(x);
+        x += if rng.chance(0.85) {
+            1
+        } else {
+            2 + rng.below(3) as u32
+        };
+    }
+    let nx = (x as usize + rng.below(2)).max(1);
+    let own: Vec<bool> = (0..n).map(|_| !rng.chance(0.08)).collect();
+    let step = if rng.chance(0.5) {
+        AaStep::Local
+    } else {
+        AaStep::Scatter
+    };
+    let params = PsmParams {
+        tau: T::lit(p.tau),
+        weighting: p.weighting,
+        solid: p.solid,
+        force: p.force.map(T::lit),
+        collision: match p.collision {
+            Collision::Bgk => Collision::Bgk,
+            Collision::Trt(t) => Collision::Trt(Trt::new(T::lit(t.magic())).expect("valid")),
+        },
+    };
+    let shares: Vec<SolidShare<T>> = shares
+        .iter()
+        .map(|s| SolidShare {
+            fraction: T::lit(s.fraction),
+            velocity: s.velocity.map(T::lit),
+        })
+        .collect();
+    // A row of populations near equilibrium, plane by plane.
+    let mut planes: Vec<Vec<T>> = (0..Q).map(|_| Vec::with_capacity(nx)).collect();
+    for _ in 0..nx {
+        let f = rng.populations();
+        for q in 0..Q {
+            planes[q].push(T::lit(f[q]));
+        }
+    }
+    let first = offsets[0] as usize;
+    let sentinel = [T::lit(123.0); 2];
+    let total = shares.len() - first;
+    fn as_row<T>(v: &mut [Vec<T>]) -> Vec<[&mut [T]; Q]> {
+        let mut it = v.iter_mut();
+        vec![std::array::from_fn(|_| {
+            it.next().expect("nine planes").as_mut_slice()
+        })]
+    }
+    // Node by node.
+    let mut want = planes.clone();
+    let mut want_ex = vec![sentinel; total];
+    {
+        let mut rows = as_row(&mut want);
+        for k in 0..n {
+            if !own[k] {
+                continue;
+            }
+            let (a, b) = (offsets[k] as usize, offsets[k + 1] as usize);
+            let mut f = load_from_rows(&rows, step, 0, columns[k] as usize, 0);
+            psm_collide_links(
+                &mut f,
+                &params,
+                &shares[a..b],
+                links[k],
+                &mut want_ex[a - first..b - first],
+            );
+            store_in_rows(&mut rows, step, 0, columns[k] as usize, 0, &f);
+        }
+    }
+    // The row pass.
+    let mut got = planes.clone();
+    let mut got_ex = vec![sentinel; total];
+    {
+        let mut rows = as_row(&mut got);
+        collide_covered_row(
+            &params,
+            &mut rows[0],
+            step,
+            &columns,
+            |k| own[k],
+            &offsets,
+            &shares,
+            &links,
+            &mut got_ex,
+        );
+    }
+    let bits = |v: T| v.to_f64_exact().to_bits();
+    for q in 0..Q {
+        for x in 0..nx {
+            prop_assert_eq!(
+                bits(got[q][x]),
+                bits(want[q][x]),
+                "plane {} column {} ({:?}, {:?})",
+                q,
+                x,
+                p.solid,
+                step
+            );
+        }
+    }
+    for (g, w) in got_ex.iter().zip(&want_ex) {
+        prop_assert_eq!(g.map(bits), w.map(bits));
+    }
+    Ok(())
+}
+
 proptest! {
     #![proptest_config(ProptestConfig::with_cases(512))]
+
+    /// The covered nodes of an in-place pass row collided by `collide_covered_row` are bitwise the node kernel
+    /// run node by node in place, for every operator, BGK and TRT, with and without force, both weightings,
+    /// both AA steps, in f64 and f32 (exact claim: the same functions on the same values).
+    #[test]
+    fn covered_row_pass_is_bitwise_the_node_kernel_in_place(seed in any::<u64>()) {
+        check_row::<f64>(seed)?;
+        check_row::<f32>(seed)?;
+    }
 
     /// The batched collision of a covered list (the lanes of `psm_collide_lanes` for the nodes with one
     /// share, the node kernel for the others) is bitwise the node kernel for every node, every operator, BGK

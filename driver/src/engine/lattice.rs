@@ -11,8 +11,7 @@ use lbdem_kernels::coupling::{
 };
 use lbdem_kernels::coverage::{ellipse_cell_grid, ellipse_grid_fractions, CellGrid};
 use lbdem_kernels::fluid::aa::{
-    load_from_rows, plane_row, store_in_rows, store_post_collision_in_plane, to_collided, AaStep,
-    Layout,
+    plane_row, store_post_collision_in_plane, to_collided, AaStep, Layout,
 };
 use lbdem_kernels::fluid::boundary::{Boundaries, SideCondition, SideProfiles};
 use lbdem_kernels::fluid::collide::{
@@ -22,7 +21,7 @@ use lbdem_kernels::fluid::collide::{
 use lbdem_kernels::fluid::d2q9::{equilibrium, OPPOSITE, Q};
 use lbdem_kernels::fluid::lattice::{LatticeShape, Side};
 use lbdem_kernels::fluid::step::{
-    classify_special_nodes, collide_covered_list, collide_covered_nodes, covered_node_value,
+    classify_special_nodes, collide_covered_nodes, collide_covered_row, covered_node_value,
     fix_special_nodes, gather_node_in, gathered_moments_in, nodes_in_rows, open_links, planes_mut,
     special_node_value, CoveredNodes, Domain, FluidParams, FLUID, SOLID,
 };
@@ -1496,6 +1495,8 @@ impl<T: Real> FluidLattice<T> {
                     // cache, collided with the partially-saturated operator and stored in place (each such node
                     // reads and writes only places of its own).
                     let mut keep = vec![false; nx];
+                    // Columns of the row's covered nodes.
+                    let mut columns: Vec<u32> = Vec::with_capacity(nx);
                     let mut k0 = lo;
                     for r in 0..band.len() {
                         let y = y0 + r;
@@ -1512,34 +1513,25 @@ impl<T: Real> FluidLattice<T> {
                                 }
                                 aa_bulk_keeping_exec(simd, row, &keep, kind, &params, &collision);
                                 let ex = &mut ex[offsets[k0] as usize - first..];
+                                columns.clear();
+                                columns
+                                    .extend(covered[k0..k1].iter().map(|&n| n - (y * nx) as u32));
+                                let columns = &columns[..];
                                 with_simd(
                                     simd,
                                     #[inline(always)]
                                     || {
-                                        collide_covered_list(
+                                        collide_covered_row(
                                             psm,
+                                            &mut row[0],
+                                            kind,
+                                            columns,
+                                            #[inline(always)]
+                                            |j| own(k0 + j),
                                             &offsets[k0..=k1],
                                             shares,
                                             &links[k0..k1],
                                             ex,
-                                            row,
-                                            #[inline(always)]
-                                            |rows, j| {
-                                                let k = k0 + j;
-                                                // Not `bool::then` with a closure: that one was left out
-                                                // of line (a call and a stall per node).
-                                                if own(k) {
-                                                    let x = covered[k] as usize - y * nx;
-                                                    Some(load_from_rows(rows, kind, y, x, y))
-                                                } else {
-                                                    None
-                                                }
-                                            },
-                                            #[inline(always)]
-                                            |rows, j, f| {
-                                                let x = covered[k0 + j] as usize - y * nx;
-                                                store_in_rows(rows, kind, y, x, y, &f);
-                                            },
                                         )
                                     },
                                 );

@@ -19,7 +19,7 @@
 //!
 //! Each pass reads only `src` and writes only the band of `dst`, so bands are independent: splitting the
 //! lattice into bands for threads gives bitwise the same result for any number of threads.
-use super::aa::{load_post_collision, Layout};
+use super::aa::{load_from_rows, load_post_collision, store_in_rows, AaStep, Layout};
 use super::boundary::{zou_he, zou_he_corner, Boundaries, SideCondition, SideProfiles};
 use super::collide::{
     bgk_collide, bgk_collide_forced, fluid_collide, lane_class, psm_collide_lanes,
@@ -678,59 +678,274 @@ pub fn collide_covered_list<T: Real, S: ?Sized>(
     mut load: impl FnMut(&S, usize) -> Option<[T; Q]>,
     mut store: impl FnMut(&mut S, usize, [T; Q]),
 ) {
-    let first = offsets.first().copied().unwrap_or(0) as usize;
     let mut queues: [LaneQueue<T>; 3] = core::array::from_fn(|_| LaneQueue {
         lanes: PsmLanes::default(),
         nodes: [0; PSM_LANES],
         len: 0,
     });
-    let slot = |c: LaneClass| match c {
-        LaneClass::Operator => 0,
-        LaneClass::LambdaPartial => 1,
-        LaneClass::LambdaFull => 2,
-    };
-    const CLASSES: [LaneClass; 3] = [
-        LaneClass::Operator,
-        LaneClass::LambdaPartial,
-        LaneClass::LambdaFull,
-    ];
     for k in 0..links.len() {
-        let Some(mut f) = load(state, k) else {
+        let Some(f) = load(state, k) else {
             continue;
         };
-        let (a, b) = (offsets[k] as usize, offsets[k + 1] as usize);
-        let node_shares = &shares[a..b];
-        match lane_class(params, node_shares) {
-            Some(class) => {
-                let q = &mut queues[slot(class)];
-                let l = q.len;
-                for (p, fp) in f.iter().enumerate() {
-                    q.lanes.f[p][l] = *fp;
-                }
-                q.lanes.share[l] = node_shares[0];
-                q.lanes.open[l] = links[k];
-                q.nodes[l] = k;
-                q.len += 1;
-                if q.len == PSM_LANES {
-                    q.flush(class, params, offsets, exchange, state, &mut store);
-                }
-            }
-            None => {
-                psm_collide_links(
-                    &mut f,
-                    params,
-                    node_shares,
-                    links[k],
-                    &mut exchange[a - first..b - first],
-                );
-                store(state, k, f);
-            }
-        }
+        push_node(
+            &mut queues,
+            k,
+            f,
+            params,
+            offsets,
+            shares,
+            links,
+            exchange,
+            state,
+            &mut store,
+        );
     }
-    for (q, class) in queues.iter_mut().zip(CLASSES) {
+    for (q, class) in queues.iter_mut().zip(QUEUE_CLASSES) {
         if q.len > 0 {
             q.flush(class, params, offsets, exchange, state, &mut store);
         }
+    }
+}
+
+/// [`collide_covered_list`] for the covered nodes of one pass row of an in-place (AA) step, in place: node k
+/// (0 ≤ k < `columns.len()`) sits in column `columns[k]` (increasing) of the row `row` (the nine plane rows
+/// [`super::aa::plane_row`] hands out for it, after a bulk pass that left these nodes as they were:
+/// [`super::aa::aa_bulk_rows_keeping`]), has the shares `shares[offsets[k] .. offsets[k + 1]]`, open links
+/// `links[k]`, and is left alone when `own(k)` is false (a special node, computed elsewhere). Every node gets
+/// bitwise what [`psm_collide_links`] gives it, stored where [`super::aa::store_in_rows`] stores it.
+///
+/// Runs of [`PSM_LANES`] nodes in consecutive interior columns (1 ≤ x ≤ nx − 2) that take the same batch
+/// kernel ([`lane_class`]) — the inside of a grain — are loaded into the lanes and stored back with one
+/// contiguous access per plane instead of a gather and a scatter per node; the other nodes go through the
+/// queues of [`collide_covered_list`].
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+pub fn collide_covered_row<T: Real>(
+    params: &PsmParams<T>,
+    row: &mut [&mut [T]; Q],
+    step: AaStep,
+    columns: &[u32],
+    own: impl Fn(usize) -> bool,
+    offsets: &[u32],
+    shares: &[SolidShare<T>],
+    links: &[OpenLinks],
+    exchange: &mut [[T; 2]],
+) {
+    let n = columns
+        .len()
+        .min(links.len())
+        .min(offsets.len().saturating_sub(1));
+    let nx = row[0].len();
+    let first = offsets.first().copied().unwrap_or(0) as usize;
+    // The batch kernel node k can take in a contiguous run: one share, ε > 0, an interior column, not special.
+    // The batch kernel node k can take in a contiguous run: one share, ε > 0, an interior column, not special.
+    #[inline(always)]
+    fn run_class<T: Real>(
+        params: &PsmParams<T>,
+        columns: &[u32],
+        own: &impl Fn(usize) -> bool,
+        offsets: &[u32],
+        shares: &[SolidShare<T>],
+        nx: usize,
+        k: usize,
+    ) -> Option<LaneClass> {
+        let x = columns[k] as usize;
+        if x == 0 || x + 2 > nx || !own(k) {
+            return None;
+        }
+        let (a, b) = (offsets[k] as usize, offsets[k + 1] as usize);
+        lane_class(params, &shares[a..b])
+    }
+    let run_class = |k: usize| run_class(params, columns, &own, offsets, shares, nx, k);
+    let mut queues: [LaneQueue<T>; 3] = core::array::from_fn(|_| LaneQueue {
+        lanes: PsmLanes::default(),
+        nodes: [0; PSM_LANES],
+        len: 0,
+    });
+    let mut run = PsmLanes::<T>::default();
+    let rows = core::slice::from_mut(row);
+    let mut store = RowStore { columns, step };
+    let mut k = 0;
+    while k < n {
+        // The run of nodes from k on that share node k's batch kernel, in consecutive columns.
+        let mut m = 0;
+        let class = run_class(k);
+        if let Some(c) = class {
+            m = 1;
+            while k + m < n
+                && columns[k + m] == columns[k] + m as u32
+                && run_class(k + m) == Some(c)
+            {
+                m += 1;
+            }
+        }
+        let whole = m - m % PSM_LANES;
+        if let (Some(c), true) = (class, whole > 0) {
+            for chunk in (k..k + whole).step_by(PSM_LANES) {
+                let x0 = columns[chunk] as usize;
+                for (l, share) in run.share.iter_mut().enumerate() {
+                    *share = shares[offsets[chunk + l] as usize];
+                    run.open[l] = links[chunk + l];
+                }
+                load_lanes(&rows[0], step, x0, &mut run.f);
+                psm_collide_lanes(&mut run, PSM_LANES, params, c);
+                store_lanes(&mut rows[0], step, x0, &run.f);
+                for l in 0..PSM_LANES {
+                    exchange[offsets[chunk + l] as usize - first] = run.exchange[l];
+                }
+            }
+        }
+        // The rest of the run (or node k alone) through the queues.
+        for (j, &x) in columns
+            .iter()
+            .enumerate()
+            .take(k + m.max(1))
+            .skip(k + whole)
+        {
+            if !own(j) {
+                continue;
+            }
+            let f = load_from_rows(rows, step, 0, x as usize, 0);
+            push_node(
+                &mut queues,
+                j,
+                f,
+                params,
+                offsets,
+                shares,
+                links,
+                exchange,
+                rows,
+                &mut store,
+            );
+        }
+        k += m.max(1);
+    }
+    for (q, class) in queues.iter_mut().zip(QUEUE_CLASSES) {
+        if q.len > 0 {
+            q.flush(class, params, offsets, exchange, rows, &mut store);
+        }
+    }
+}
+
+/// Where the post-collision populations of a batched node go ([`push_node`], [`LaneQueue::flush`]): a closure
+/// `(state, k, f)`, or the in-place rows of [`collide_covered_row`]. A trait with an `#[inline(always)]` method
+/// rather than a closure, which the compiler left out of line (a call per node).
+trait NodeStore<T, S: ?Sized> {
+    fn put(&mut self, state: &mut S, k: usize, f: [T; Q]);
+}
+
+impl<T, S: ?Sized, F: FnMut(&mut S, usize, [T; Q])> NodeStore<T, S> for F {
+    #[inline(always)]
+    fn put(&mut self, state: &mut S, k: usize, f: [T; Q]) {
+        self(state, k, f)
+    }
+}
+
+/// [`collide_covered_row`]'s store: node k at column `columns[k]` of the single pass row.
+struct RowStore<'a> {
+    columns: &'a [u32],
+    step: AaStep,
+}
+
+impl<T: Real> NodeStore<T, [[&mut [T]; Q]]> for RowStore<'_> {
+    #[inline(always)]
+    fn put(&mut self, rows: &mut [[&mut [T]; Q]], k: usize, f: [T; Q]) {
+        store_in_rows(rows, self.step, 0, self.columns[k] as usize, 0, &f);
+    }
+}
+
+/// The lane kernels in the order of the queues of [`collide_covered_list`] ([`queue_slot`]).
+const QUEUE_CLASSES: [LaneClass; 3] = [
+    LaneClass::Operator,
+    LaneClass::LambdaPartial,
+    LaneClass::LambdaFull,
+];
+
+/// The queue of [`QUEUE_CLASSES`] a lane kernel uses.
+#[inline(always)]
+fn queue_slot(c: LaneClass) -> usize {
+    match c {
+        LaneClass::Operator => 0,
+        LaneClass::LambdaPartial => 1,
+        LaneClass::LambdaFull => 2,
+    }
+}
+
+/// Node k with gathered populations `f`: queued for its batch kernel (flushed when the queue is full), or
+/// collided alone by [`psm_collide_links`] and stored.
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+fn push_node<T: Real, S: ?Sized>(
+    queues: &mut [LaneQueue<T>; 3],
+    k: usize,
+    mut f: [T; Q],
+    params: &PsmParams<T>,
+    offsets: &[u32],
+    shares: &[SolidShare<T>],
+    links: &[OpenLinks],
+    exchange: &mut [[T; 2]],
+    state: &mut S,
+    store: &mut impl NodeStore<T, S>,
+) {
+    let first = offsets.first().copied().unwrap_or(0) as usize;
+    let (a, b) = (offsets[k] as usize, offsets[k + 1] as usize);
+    let node_shares = &shares[a..b];
+    match lane_class(params, node_shares) {
+        Some(class) => {
+            let q = &mut queues[queue_slot(class)];
+            let l = q.len;
+            for (p, fp) in f.iter().enumerate() {
+                q.lanes.f[p][l] = *fp;
+            }
+            q.lanes.share[l] = node_shares[0];
+            q.lanes.open[l] = links[k];
+            q.nodes[l] = k;
+            q.len += 1;
+            if q.len == PSM_LANES {
+                q.flush(class, params, offsets, exchange, state, store);
+            }
+        }
+        None => {
+            psm_collide_links(
+                &mut f,
+                params,
+                node_shares,
+                links[k],
+                &mut exchange[a - first..b - first],
+            );
+            store.put(state, k, f);
+        }
+    }
+}
+
+/// The lanes of [`PSM_LANES`] nodes in the consecutive interior columns x0, x0 + 1, … of a pass row, loaded as
+/// [`super::aa::load_from_rows`] gathers each: `f[p][l]` from plane row p̄ at x0 + l (local step) or plane row p
+/// at x0 + l − c_p,x (scatter step), one contiguous slice per plane.
+#[inline(always)]
+fn load_lanes<T: Real>(row: &[&mut [T]; Q], step: AaStep, x0: usize, f: &mut [[T; PSM_LANES]; Q]) {
+    for (p, fp) in f.iter_mut().enumerate() {
+        let (plane, start) = match step {
+            AaStep::Local => (OPPOSITE[p], x0),
+            AaStep::Scatter => (p, (x0 as isize - VELOCITIES[p][0] as isize) as usize),
+        };
+        fp.copy_from_slice(&row[plane][start..start + PSM_LANES]);
+    }
+}
+
+/// Store lanes loaded by [`load_lanes`] back where [`super::aa::store_in_rows`] stores each node: `f[p][l]`
+/// into plane row p at x0 + l (local step), `f[p̄][l]` into plane row p at x0 + l − c_p,x (scatter step).
+#[inline(always)]
+fn store_lanes<T: Real>(row: &mut [&mut [T]; Q], step: AaStep, x0: usize, f: &[[T; PSM_LANES]; Q]) {
+    for (p, plane) in row.iter_mut().enumerate() {
+        let (src, start) = match step {
+            AaStep::Local => (p, x0),
+            AaStep::Scatter => (
+                OPPOSITE[p],
+                (x0 as isize - VELOCITIES[p][0] as isize) as usize,
+            ),
+        };
+        plane[start..start + PSM_LANES].copy_from_slice(&f[src]);
     }
 }
 
@@ -751,7 +966,7 @@ impl<T: Real> LaneQueue<T> {
         offsets: &[u32],
         exchange: &mut [[T; 2]],
         state: &mut S,
-        store: &mut impl FnMut(&mut S, usize, [T; Q]),
+        store: &mut impl NodeStore<T, S>,
     ) {
         let first = offsets.first().copied().unwrap_or(0) as usize;
         // Unused lanes repeat lane 0 (finite values; their results are dropped).
@@ -765,7 +980,7 @@ impl<T: Real> LaneQueue<T> {
         psm_collide_lanes(&mut self.lanes, PSM_LANES, params, class);
         for l in 0..self.len {
             let k = self.nodes[l];
-            store(state, k, core::array::from_fn(|p| self.lanes.f[p][l]));
+            store.put(state, k, core::array::from_fn(|p| self.lanes.f[p][l]));
             exchange[offsets[k] as usize - first] = self.lanes.exchange[l];
         }
         self.len = 0;
