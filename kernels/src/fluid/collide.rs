@@ -1088,8 +1088,8 @@ impl<T: Real> Default for PsmLanes<T> {
 /// (so each node's bits are [`psm_collide_links`]'s), in one loop over the lanes with no call and no branch on the
 /// uniform choices (operator, collision, forcing, weighting), which the callers make constants. A macro rather
 /// than a function taking a closure: the closure was not inlined into the loop. Compiled inside the fluid step's
-/// `with_simd` (AVX-512 or AVX2), the compiler vectorises this loop across the lanes: a node costs about 12 ns
-/// in a batch against 31–43 ns alone (`benches/examples/psm_lanes.rs`, 2026-12-05). Tried and slower (1.7× the
+/// `with_simd` (AVX-512 or AVX2), the compiler vectorises this loop across the lanes: a node costs 11–13 ns
+/// in a batch against 27–43 ns alone (`benches/examples/psm_lanes.rs`, 2026-12-05). Tried and slower (1.7× the
 /// step's cost per covered node): the kernels written once over a lane-vector type whose every operation is
 /// its own loop over `[T; PSM_LANES]` (README, "Cost of a covered node").
 macro_rules! for_lanes {
