@@ -17,7 +17,7 @@
 #[path = "../src/coupled_scene.rs"]
 mod coupled_scene;
 
-use lbdem_benches::{cpu_seconds, load_average, quartiles};
+use lbdem_benches::{arg, cpu_seconds, load_average, quartiles};
 use std::time::Instant;
 
 use lbdem::engine::coupled::CoupledWorld;
@@ -109,11 +109,7 @@ fn run<T: Real>(
 
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
-    let num = |i: usize, default: usize| -> usize {
-        args.get(i)
-            .map(|s| s.parse().expect("numeric argument"))
-            .unwrap_or(default)
-    };
+    let num = |i: usize, default: usize| arg(&args, i, default);
     let (nx, ny, block, rounds) = (num(0, 1000), num(1, 500), num(2, 20), num(3, 15));
     let prec = args.get(4).map_or("f64", |s| s.as_str());
     let load_before = load_average();

@@ -88,11 +88,7 @@ fn run<T: Real>(
 
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
-    let arg = |i: usize, default: f64| -> f64 {
-        args.get(i)
-            .map(|s| s.parse().expect("numeric argument"))
-            .unwrap_or(default)
-    };
+    let arg = |i: usize, default: f64| lbdem_benches::arg(&args, i, default);
     let (nx, ny) = (arg(0, 1000.0) as usize, arg(1, 500.0) as usize);
     let steps = arg(2, 10.0) as u64;
     let radius = arg(3, 0.7);

@@ -10,7 +10,7 @@
 //! process CPU time per block of `reps` passes over 4096 nodes, the classes interleaved round by round; prints
 //! the median ns per node of each.
 use lbdem::engine::exec::{with_simd, SimdLevel};
-use lbdem_benches::{cpu_seconds, load_average, quartiles};
+use lbdem_benches::{arg, cpu_seconds, load_average, quartiles};
 use lbdem_kernels::fluid::collide::{
     bgk_collide, lane_class, psm_collide_lanes, psm_collide_links, Collision, OpenLinks, PsmLanes,
     PsmParams, SolidOperator, SolidShare, Trt, Weighting, PSM_LANES,
@@ -53,11 +53,7 @@ fn time(n: usize, reps: usize, sum: &mut f64, mut pass: impl FnMut() -> f64) -> 
 
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
-    let num = |i: usize, default: usize| -> usize {
-        args.get(i)
-            .map(|s| s.parse().expect("numeric argument"))
-            .unwrap_or(default)
-    };
+    let num = |i: usize, default: usize| arg(&args, i, default);
     let (reps, rounds) = (num(0, 400), num(1, 5));
     let load_before = load_average();
     let simd = SimdLevel::detect();

@@ -14,7 +14,7 @@
 mod coupled_scene;
 
 use lbdem::engine::lattice::FluidLattice;
-use lbdem_benches::{cpu_seconds, load_average, quartiles};
+use lbdem_benches::{arg, cpu_seconds, load_average, quartiles};
 use lbdem_kernels::fluid::collide::{Collision, SolidOperator, Trt};
 use lbdem_kernels::Real;
 
@@ -89,11 +89,7 @@ fn run<T: Real>(nx: usize, ny: usize, block: usize, rounds: usize) {
 
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
-    let num = |i: usize, default: usize| -> usize {
-        args.get(i)
-            .map(|s| s.parse().expect("numeric argument"))
-            .unwrap_or(default)
-    };
+    let num = |i: usize, default: usize| arg(&args, i, default);
     let (nx, ny, block, rounds) = (num(0, 1000), num(1, 500), num(2, 10), num(3, 9));
     let load_before = load_average();
     let pool = rayon::ThreadPoolBuilder::new()

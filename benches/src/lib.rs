@@ -16,6 +16,22 @@ pub fn cpu_seconds() -> f64 {
         .unwrap_or(0.0)
 }
 
+/// Positional argument `i` of an example's command line (`args`: the arguments after the program name),
+/// parsed as `T`, or `default` when absent; a value that does not parse ends the program with exit code 2 and a
+/// message naming the position and the value.
+pub fn arg<T: std::str::FromStr>(args: &[String], i: usize, default: T) -> T {
+    match args.get(i) {
+        None => default,
+        Some(s) => s.parse().unwrap_or_else(|_| {
+            eprintln!(
+                "argument {} ({s:?}) is not a number of the expected kind",
+                i + 1
+            );
+            std::process::exit(2)
+        }),
+    }
+}
+
 /// Lower quartile, median and upper quartile of `v` (nearest-rank on the sorted values); `v` must not be
 /// empty.
 pub fn quartiles(mut v: Vec<f64>) -> [f64; 3] {
@@ -34,6 +50,14 @@ pub fn load_average() -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn arg_parses_the_given_position_or_takes_the_default() {
+        let args = vec!["12".to_string(), "0.5".to_string()];
+        assert_eq!(arg(&args, 0, 7usize), 12);
+        assert_eq!(arg(&args, 1, 0.0f64), 0.5);
+        assert_eq!(arg(&args, 2, 9usize), 9);
+    }
 
     #[test]
     fn quartiles_of_nine_values_are_the_third_fifth_and_seventh() {
