@@ -183,6 +183,44 @@ fn packing_is_bitwise_deterministic_for_a_seed() {
     assert!(a.world.particles.iter().any(|p| p.angle > 1.0));
 }
 
+/// The pair-contact pass runs at the widest instruction set the CPU has (`DemWorld::set_simd`): stepping a
+/// bonded ellipse packing under a platen load at every available level gives bitwise the baseline's particles,
+/// bonds and breaks (IEEE arithmetic rounds the same in every vector width; no fused multiply-add).
+#[test]
+fn ellipse_contacts_are_bitwise_the_same_at_every_instruction_set() {
+    use lbdem::engine::exec::SimdLevel;
+    let mut spec = PackingSpec::dissertation(1.2, 1.2, 0.5, 3);
+    spec.max_servo_steps = 2000;
+    let bonds = Some(BondSpec::Point {
+        stiffness: 1e5,
+        strength: 700.0,
+    });
+    let packed = generate_packing(&spec, bonds).unwrap();
+    let run = |level: SimdLevel| {
+        let mut p = packed.clone();
+        p.world.set_simd(level).unwrap();
+        let b = p.sample_box;
+        p.world.platens[b.top].control = PlatenControl::Speed(0.5);
+        let mut active = 0;
+        for _ in 0..200 {
+            p.world.step();
+            active = active.max(p.world.active_contacts());
+        }
+        (p.world, active)
+    };
+    let (base, active) = run(SimdLevel::Baseline);
+    // Ellipse pairs in contact: the closest-approach search really runs.
+    assert!(active > 20, "{active} active contacts");
+    assert!(base.particles.iter().any(|p| p.angle > 1.0));
+    for level in SimdLevel::ALL.into_iter().filter(|l| l.available()) {
+        let (w, _) = run(level);
+        assert_eq!(w.particles, base.particles, "{level:?}");
+        assert_eq!(w.bonds, base.bonds, "{level:?}");
+        assert_eq!(w.breaks, base.breaks, "{level:?}");
+        assert_eq!(w.platens, base.platens, "{level:?}");
+    }
+}
+
 fn bonded_hexagonal_block(side: usize) -> Packing<f64> {
     let particles = hexagonal_packing(side, side, 0.09, 1.0, 0.02, 2.65, 3);
     let model = ContactModel {

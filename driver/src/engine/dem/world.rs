@@ -49,6 +49,7 @@ use rayon::prelude::*;
 
 use serde::{Deserialize, Serialize};
 
+use crate::engine::exec::{with_simd, SimdLevel};
 use crate::error::{LbdemError, Result};
 
 /// Contacts per particle assumed by the critical-step estimate (the hexagonal coordination of equal discs).
@@ -221,6 +222,10 @@ pub struct DemWorld<T> {
     pub breaks: Vec<BreakRecord<T>>,
     /// Broad-phase skin: pairs whose bounding circles are within it are tested.
     pub margin: T,
+    /// Instruction set of the pair-contact pass (the widest the CPU has unless set; not saved: a resumed run
+    /// takes the resuming CPU's, with the same bits).
+    #[serde(skip, default = "SimdLevel::detect")]
+    simd: SimdLevel,
     dt: T,
     step: u64,
     active_contacts: usize,
@@ -308,6 +313,7 @@ impl<T: Real> DemWorld<T> {
             held: vec![false; n],
             breaks: Vec::new(),
             margin: T::zero(),
+            simd: SimdLevel::detect(),
             dt,
             step: 0,
             active_contacts: 0,
@@ -761,6 +767,21 @@ impl<T: Real> DemWorld<T> {
         .expect("history buffers sized to their pair lists");
     }
 
+    /// Choose the instruction set of the pair-contact pass (the ellipse searches' samples vectorise). Results
+    /// are bitwise the same at every level; only speed changes. Refuses a level this CPU lacks.
+    pub fn set_simd(&mut self, simd: SimdLevel) -> Result<()> {
+        if !simd.available() {
+            return Err(LbdemError::field(
+                "simd",
+                simd.name(),
+                "is not supported by this CPU",
+                &format!("use {} or a narrower level", SimdLevel::detect().name()),
+            ));
+        }
+        self.simd = simd;
+        Ok(())
+    }
+
     /// Advance one step (see the module documentation for the order).
     pub fn step(&mut self) {
         let n = self.particles.len();
@@ -772,6 +793,7 @@ impl<T: Real> DemWorld<T> {
         self.torque.resize(n, T::zero());
         let model = self.model;
         let particles = &self.particles;
+        let simd = self.simd;
         const INVALID: &str = "the broad phase's pairs and the bonds join particles of the world";
 
         // Contacts: the kernel's pair passes, evaluated in parallel chunks, summed in pair order; each
@@ -784,7 +806,13 @@ impl<T: Real> DemWorld<T> {
             .zip(self.shear.par_chunks_mut(PARALLEL_CHUNK))
             .zip(self.contact_forces.par_chunks_mut(PARALLEL_CHUNK))
             .try_for_each(|((pairs, shear), out)| {
-                pair_contacts_placed(&model, particles, &placed, pairs, shear, dt, out)
+                // At the widest vector level of the CPU (the 32 samples of each ellipse search are
+                // independent; IEEE arithmetic gives the same bits at every level).
+                with_simd(
+                    simd,
+                    #[inline(always)]
+                    || pair_contacts_placed(&model, particles, &placed, pairs, shear, dt, out),
+                )
             })
             .expect(INVALID);
         let sums = add_pair_forces(
