@@ -737,10 +737,16 @@ pub fn collide_covered_row<T: Real>(
         .min(offsets.len().saturating_sub(1));
     let nx = row[0].len();
     let first = offsets.first().copied().unwrap_or(0) as usize;
-    // The batch kernel node k can take in a contiguous run: one share, ε > 0, an interior column, not special.
-    // The batch kernel node k can take in a contiguous run: one share, ε > 0, an interior column, not special.
+    // What node k takes, decided once per node: left alone (special), the node kernel, or a batch kernel
+    // ([`lane_class`]; `true` in an interior column, where it can join a contiguous run).
+    #[derive(Clone, Copy, PartialEq, Eq)]
+    enum Take {
+        Skip,
+        Node,
+        Lane(LaneClass, bool),
+    }
     #[inline(always)]
-    fn run_class<T: Real>(
+    fn take<T: Real>(
         params: &PsmParams<T>,
         columns: &[u32],
         own: &impl Fn(usize) -> bool,
@@ -748,15 +754,20 @@ pub fn collide_covered_row<T: Real>(
         shares: &[SolidShare<T>],
         nx: usize,
         k: usize,
-    ) -> Option<LaneClass> {
-        let x = columns[k] as usize;
-        if x == 0 || x + 2 > nx || !own(k) {
-            return None;
+    ) -> Take {
+        if !own(k) {
+            return Take::Skip;
         }
         let (a, b) = (offsets[k] as usize, offsets[k + 1] as usize);
-        lane_class(params, &shares[a..b])
+        match lane_class(params, &shares[a..b]) {
+            None => Take::Node,
+            Some(c) => {
+                let x = columns[k] as usize;
+                Take::Lane(c, x != 0 && x + 2 <= nx)
+            }
+        }
     }
-    let run_class = |k: usize| run_class(params, columns, &own, offsets, shares, nx, k);
+    let take = |k: usize| take(params, columns, &own, offsets, shares, nx, k);
     let mut queues: [LaneQueue<T>; 3] = core::array::from_fn(|_| LaneQueue {
         lanes: PsmLanes::default(),
         nodes: [0; PSM_LANES],
@@ -766,21 +777,28 @@ pub fn collide_covered_row<T: Real>(
     let rows = core::slice::from_mut(row);
     let mut store = RowStore { columns, step };
     let mut k = 0;
+    // The take of node k when the previous run's scan already decided it (a run that ends on a column gap or
+    // at the row's end leaves it to be decided afresh).
+    let mut next = None;
     while k < n {
-        // The run of nodes from k on that share node k's batch kernel, in consecutive columns.
-        let mut m = 0;
-        let class = run_class(k);
-        if let Some(c) = class {
-            m = 1;
-            while k + m < n
-                && columns[k + m] == columns[k] + m as u32
-                && run_class(k + m) == Some(c)
-            {
+        let t = next.take().unwrap_or_else(|| take(k));
+        // The run of nodes from k on in consecutive interior columns that take node k's batch kernel.
+        let mut m = 1;
+        if let Take::Lane(_, true) = t {
+            while k + m < n && columns[k + m] == columns[k] + m as u32 {
+                let u = take(k + m);
+                if u != t {
+                    next = Some(u);
+                    break;
+                }
                 m += 1;
             }
         }
-        let whole = m - m % PSM_LANES;
-        if let (Some(c), true) = (class, whole > 0) {
+        let whole = match t {
+            Take::Lane(_, true) => m - m % PSM_LANES,
+            _ => 0,
+        };
+        if let Take::Lane(c, true) = t {
             for chunk in (k..k + whole).step_by(PSM_LANES) {
                 let x0 = columns[chunk] as usize;
                 for (l, share) in run.share.iter_mut().enumerate() {
@@ -795,31 +813,41 @@ pub fn collide_covered_row<T: Real>(
                 }
             }
         }
-        // The rest of the run (or node k alone) through the queues.
-        for (j, &x) in columns
-            .iter()
-            .enumerate()
-            .take(k + m.max(1))
-            .skip(k + whole)
-        {
-            if !own(j) {
-                continue;
+        // The rest of the run (or node k alone): its batch kernel's queue, or the node kernel.
+        for (j, &x) in columns.iter().enumerate().take(k + m).skip(k + whole) {
+            match t {
+                Take::Skip => {}
+                Take::Node => {
+                    let mut f = load_from_rows(rows, step, 0, x as usize, 0);
+                    let (a, b) = (offsets[j] as usize, offsets[j + 1] as usize);
+                    psm_collide_links(
+                        &mut f,
+                        params,
+                        &shares[a..b],
+                        links[j],
+                        &mut exchange[a - first..b - first],
+                    );
+                    store.put(rows, j, f);
+                }
+                Take::Lane(c, _) => {
+                    let f = load_from_rows(rows, step, 0, x as usize, 0);
+                    push_lane(
+                        &mut queues,
+                        c,
+                        j,
+                        f,
+                        params,
+                        offsets,
+                        shares,
+                        links,
+                        exchange,
+                        rows,
+                        &mut store,
+                    );
+                }
             }
-            let f = load_from_rows(rows, step, 0, x as usize, 0);
-            push_node(
-                &mut queues,
-                j,
-                f,
-                params,
-                offsets,
-                shares,
-                links,
-                exchange,
-                rows,
-                &mut store,
-            );
         }
-        k += m.max(1);
+        k += m;
     }
     for (q, class) in queues.iter_mut().zip(QUEUE_CLASSES) {
         if q.len > 0 {
@@ -890,32 +918,51 @@ fn push_node<T: Real, S: ?Sized>(
 ) {
     let first = offsets.first().copied().unwrap_or(0) as usize;
     let (a, b) = (offsets[k] as usize, offsets[k + 1] as usize);
-    let node_shares = &shares[a..b];
-    match lane_class(params, node_shares) {
-        Some(class) => {
-            let q = &mut queues[queue_slot(class)];
-            let l = q.len;
-            for (p, fp) in f.iter().enumerate() {
-                q.lanes.f[p][l] = *fp;
-            }
-            q.lanes.share[l] = node_shares[0];
-            q.lanes.open[l] = links[k];
-            q.nodes[l] = k;
-            q.len += 1;
-            if q.len == PSM_LANES {
-                q.flush(class, params, offsets, exchange, state, store);
-            }
-        }
+    match lane_class(params, &shares[a..b]) {
+        Some(class) => push_lane(
+            queues, class, k, f, params, offsets, shares, links, exchange, state, store,
+        ),
         None => {
             psm_collide_links(
                 &mut f,
                 params,
-                node_shares,
+                &shares[a..b],
                 links[k],
                 &mut exchange[a - first..b - first],
             );
             store.put(state, k, f);
         }
+    }
+}
+
+/// Node k, whose batch kernel is `class` ([`lane_class`]), with gathered populations `f`: queued, the queue
+/// flushed when full.
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+fn push_lane<T: Real, S: ?Sized>(
+    queues: &mut [LaneQueue<T>; 3],
+    class: LaneClass,
+    k: usize,
+    f: [T; Q],
+    params: &PsmParams<T>,
+    offsets: &[u32],
+    shares: &[SolidShare<T>],
+    links: &[OpenLinks],
+    exchange: &mut [[T; 2]],
+    state: &mut S,
+    store: &mut impl NodeStore<T, S>,
+) {
+    let q = &mut queues[queue_slot(class)];
+    let l = q.len;
+    for (p, fp) in f.iter().enumerate() {
+        q.lanes.f[p][l] = *fp;
+    }
+    q.lanes.share[l] = shares[offsets[k] as usize];
+    q.lanes.open[l] = links[k];
+    q.nodes[l] = k;
+    q.len += 1;
+    if q.len == PSM_LANES {
+        q.flush(class, params, offsets, exchange, state, store);
     }
 }
 
