@@ -191,6 +191,10 @@ struct BodyCells {
     key: Option<[u64; 6]>,
     range: Option<[usize; 4]>,
     fractions: Vec<(u32, f64)>,
+    /// With `range` = [x0, x1, y0, y1]: the index in `fractions` of the first cell of each row y0 ..= y1 + 1
+    /// (the last entry is `fractions.len()`), so the cells of rows ya..yb are `fractions[row_starts[ya − y0] ..
+    /// row_starts[yb − y0]]` without a search.
+    row_starts: Vec<u32>,
     /// Scratch of the whole-ellipse kernel (`ellipse_grid_fractions`): fractions and boundary marks of the
     /// body's unclamped cell block.
     grid_fractions: Vec<f64>,
@@ -228,6 +232,28 @@ impl BodyCells {
     }
 
     fn recompute<T: Real>(
+        &mut self,
+        body: &CoupledBody<f64>,
+        s: &LatticeShape,
+        bc: &Boundaries<T>,
+    ) {
+        self.recompute_cells(body, s, bc);
+        // Where each row's cells start (one pass over the cells, in node order).
+        self.row_starts.clear();
+        if let Some([_, _, y0, y1]) = self.range {
+            let mut i = 0;
+            for y in y0..=y1 + 1 {
+                let first = (y * s.nx) as u32;
+                while i < self.fractions.len() && self.fractions[i].0 < first {
+                    i += 1;
+                }
+                self.row_starts.push(i as u32);
+            }
+        }
+    }
+
+    /// The cells and their fractions (see [`BodyCells::recompute`]).
+    fn recompute_cells<T: Real>(
         &mut self,
         body: &CoupledBody<f64>,
         s: &LatticeShape,
@@ -889,26 +915,29 @@ impl<T: Real> FluidLattice<T> {
         let bands = s.ny.div_ceil(band_rows);
         scratch.count.resize(s.nodes(), 0);
         let cells = &scratch.bodies;
-        // The bodies meeting each band and the index range of their cells in it.
-        let in_band = |b: usize| -> Vec<(usize, usize, usize)> {
-            let (y0, y1) = (b * band_rows, ((b + 1) * band_rows).min(s.ny));
-            let (lo, hi) = ((y0 * nx) as u32, (y1 * nx) as u32);
-            cells
-                .iter()
+        // The bodies meeting each band and the index range of their cells in it, bodies in increasing order in
+        // every band: each body's cells cut at the band boundaries its rows cross, from its row starts (a binary
+        // search per body and band boundary here took 4 % of the full-size fracture step, cache misses).
+        let mut band_bodies: Vec<Vec<(usize, usize, usize)>> = vec![Vec::new(); bands];
+        for (k, c) in cells.iter().enumerate() {
+            let Some([_, _, cy0, cy1]) = c.range else {
+                continue;
+            };
+            let first = cy0 / band_rows;
+            for (b, list) in band_bodies
+                .iter_mut()
                 .enumerate()
-                .filter_map(|(k, c)| {
-                    let [_, _, cy0, cy1] = c.range?;
-                    if cy1 < y0 || cy0 >= y1 {
-                        return None;
-                    }
-                    let i0 = c.fractions.partition_point(|&(n, _)| n < lo);
-                    let i1 = i0 + c.fractions[i0..].partition_point(|&(n, _)| n < hi);
-                    (i1 > i0).then_some((k, i0, i1))
-                })
-                .collect()
-        };
-        let band_bodies: Vec<Vec<(usize, usize, usize)>> =
-            (0..bands).into_par_iter().map(in_band).collect();
+                .take((cy1 / band_rows + 1).min(bands))
+                .skip(first)
+            {
+                let (y0, y1) = (b * band_rows, ((b + 1) * band_rows).min(s.ny));
+                let i0 = c.row_starts[y0.max(cy0) - cy0] as usize;
+                let i1 = c.row_starts[y1.min(cy1 + 1) - cy0] as usize;
+                if i1 > i0 {
+                    list.push((k, i0, i1));
+                }
+            }
+        }
         // (covered nodes, shares) of each band.
         let band_sizes: Vec<(usize, usize)> = scratch
             .count
