@@ -56,6 +56,20 @@ impl SimdLevel {
         }
     }
 
+    /// `Ok` when this CPU can run the level; otherwise the error naming the `simd` option and the widest level
+    /// it has.
+    pub fn check_available(self) -> crate::error::Result<()> {
+        if self.available() {
+            return Ok(());
+        }
+        Err(crate::error::LbdemError::field(
+            "simd",
+            self.name(),
+            "is not supported by this CPU",
+            &format!("use {} or a narrower level", SimdLevel::detect().name()),
+        ))
+    }
+
     /// The widest level this CPU has.
     pub fn detect() -> Self {
         Self::ALL

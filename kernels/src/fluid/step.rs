@@ -818,16 +818,10 @@ pub fn collide_covered_row<T: Real>(
             match t {
                 Take::Skip => {}
                 Take::Node => {
-                    let mut f = load_from_rows(rows, step, 0, x as usize, 0);
-                    let (a, b) = (offsets[j] as usize, offsets[j + 1] as usize);
-                    psm_collide_links(
-                        &mut f,
-                        params,
-                        &shares[a..b],
-                        links[j],
-                        &mut exchange[a - first..b - first],
+                    let f = load_from_rows(rows, step, 0, x as usize, 0);
+                    collide_alone(
+                        j, f, params, offsets, shares, links, exchange, rows, &mut store,
                     );
-                    store.put(rows, j, f);
                 }
                 Take::Lane(c, _) => {
                     let f = load_from_rows(rows, step, 0, x as usize, 0);
@@ -907,6 +901,30 @@ fn queue_slot(c: LaneClass) -> usize {
 fn push_node<T: Real, S: ?Sized>(
     queues: &mut [LaneQueue<T>; 3],
     k: usize,
+    f: [T; Q],
+    params: &PsmParams<T>,
+    offsets: &[u32],
+    shares: &[SolidShare<T>],
+    links: &[OpenLinks],
+    exchange: &mut [[T; 2]],
+    state: &mut S,
+    store: &mut impl NodeStore<T, S>,
+) {
+    let (a, b) = (offsets[k] as usize, offsets[k + 1] as usize);
+    match lane_class(params, &shares[a..b]) {
+        Some(class) => push_lane(
+            queues, class, k, f, params, offsets, shares, links, exchange, state, store,
+        ),
+        None => collide_alone(k, f, params, offsets, shares, links, exchange, state, store),
+    }
+}
+
+/// Node k with gathered populations `f` collided alone by [`psm_collide_links`] (its exchange written) and
+/// stored.
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+fn collide_alone<T: Real, S: ?Sized>(
+    k: usize,
     mut f: [T; Q],
     params: &PsmParams<T>,
     offsets: &[u32],
@@ -918,21 +936,14 @@ fn push_node<T: Real, S: ?Sized>(
 ) {
     let first = offsets.first().copied().unwrap_or(0) as usize;
     let (a, b) = (offsets[k] as usize, offsets[k + 1] as usize);
-    match lane_class(params, &shares[a..b]) {
-        Some(class) => push_lane(
-            queues, class, k, f, params, offsets, shares, links, exchange, state, store,
-        ),
-        None => {
-            psm_collide_links(
-                &mut f,
-                params,
-                &shares[a..b],
-                links[k],
-                &mut exchange[a - first..b - first],
-            );
-            store.put(state, k, f);
-        }
-    }
+    psm_collide_links(
+        &mut f,
+        params,
+        &shares[a..b],
+        links[k],
+        &mut exchange[a - first..b - first],
+    );
+    store.put(state, k, f);
 }
 
 /// Node k, whose batch kernel is `class` ([`lane_class`]), with gathered populations `f`: queued, the queue

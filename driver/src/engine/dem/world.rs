@@ -770,14 +770,7 @@ impl<T: Real> DemWorld<T> {
     /// Choose the instruction set of the pair-contact pass (the ellipse searches' samples vectorise). Results
     /// are bitwise the same at every level; only speed changes. Refuses a level this CPU lacks.
     pub fn set_simd(&mut self, simd: SimdLevel) -> Result<()> {
-        if !simd.available() {
-            return Err(LbdemError::field(
-                "simd",
-                simd.name(),
-                "is not supported by this CPU",
-                &format!("use {} or a narrower level", SimdLevel::detect().name()),
-            ));
-        }
+        simd.check_available()?;
         self.simd = simd;
         Ok(())
     }
