@@ -24,7 +24,8 @@ use lbdem_kernels::dem::assembly::{
 };
 use lbdem_kernels::dem::bond::{Bond, BondForce, BondLaw, ParallelBond, PointBond};
 use lbdem_kernels::dem::contact::{
-    closest_approach, ellipse_sample_separates, wall_contact, ELLIPSE_SAMPLES,
+    closest_approach, ellipse_ellipse, ellipse_ellipse_if_touching, ellipse_sample_separates,
+    wall_contact, ELLIPSE_SAMPLES,
 };
 use lbdem_kernels::dem::integrate::central_difference_step;
 use lbdem_kernels::dem::law::{linear_contact_force, BodyState, ContactForce};
@@ -807,6 +808,35 @@ proptest! {
         }
         // A placed list shorter than the particles is refused.
         prop_assert!(pair_contacts_placed(&m, &ps, &placed[..1], &pairs, &mut shear_p, dt, &mut slots_p).is_err());
+    }
+}
+
+proptest! {
+    #![proptest_config(config(512))]
+
+    /// `ellipse_ellipse_if_touching` (the pair pass's second cull) is the full search bit for bit where it
+    /// answers, and answers `None` only for pairs the full search finds not interpenetrating: random ellipses
+    /// and discs, from overlapping to apart, through their placed shapes as the pair pass gives them.
+    #[test]
+    fn ellipse_ellipse_if_touching_is_the_search_or_a_certain_miss(
+        a in particle(),
+        b in particle(),
+        spread in prop_oneof![Just(0.3), Just(1.0), Just(2.0)],
+    ) {
+        let (mut a, mut b) = (a, b);
+        a.position *= spread;
+        b.position *= spread;
+        let (pa, pb) = (a.placed(), b.placed());
+        let full = ellipse_ellipse(&pa, &pb);
+        match ellipse_ellipse_if_touching(&pa, &pb) {
+            Some(c) => {
+                prop_assert_eq!(format!("{c:?}"), format!("{full:?}"));
+                for (x, y) in [(c.overlap, full.overlap), (c.normal[0], full.normal[0]), (c.normal[1], full.normal[1])] {
+                    prop_assert_eq!(x.to_bits(), y.to_bits());
+                }
+            }
+            None => prop_assert!(!full.is_active(), "culled an active pair: overlap {}", full.overlap),
+        }
     }
 }
 

@@ -22,7 +22,9 @@
 //!
 //! Units: as the per-contact kernels (consistent, caller-chosen).
 use super::bond::{Bond, BondForce};
-use super::contact::{disc_disc, ellipse_ellipse, ellipse_sample_separates, wall_contact};
+use super::contact::{
+    disc_disc, ellipse_ellipse_if_touching, ellipse_sample_separates, wall_contact,
+};
 use super::integrate::{central_difference_step, particle_critical_time_step};
 use super::law::{effective_mass, linear_contact_force, BodyState, ContactForce, ContactLaw};
 use super::shape::{Particle, Placed, Shape, Wall};
@@ -186,8 +188,9 @@ fn check_bonds<T>(bonds: &[Bond<T>], n: usize) -> Result<(), AssemblyError> {
 /// pair. Chunkable: any aligned split of `pairs`, `shear` and `out` gives the same slots.
 ///
 /// Pairs with an ellipse that one sample of the closest-approach search already separates
-/// ([`ellipse_sample_separates`]) skip the search: their slot is the inactive contact's, exactly what the
-/// search would have given.
+/// ([`ellipse_sample_separates`], the direction nearest to the line of centres, then any of the search's samples,
+/// [`ellipse_ellipse_if_touching`](super::contact::ellipse_ellipse_if_touching)) skip the search or its
+/// refinements: their slot is the inactive contact's, exactly what the search would have given.
 pub fn pair_contacts<T: Real>(
     model: &ContactModel<T>,
     particles: &[Particle<T>],
@@ -250,13 +253,20 @@ fn pair_contacts_with<T: Real>(
             }
             _ => {
                 let (a, b) = (placed(i), placed(j));
-                if ellipse_sample_separates(&a, &b) {
+                // Two culls that never change a slot: the sample nearest to the line of centres, then all
+                // the search's samples (the refinements are skipped where any separates).
+                let touching = if ellipse_sample_separates(&a, &b) {
+                    None
+                } else {
+                    ellipse_ellipse_if_touching(&a, &b)
+                };
+                let Some(c) = touching else {
                     // What `linear_contact_force` does with an inactive contact.
                     *history = T::zero();
                     *slot = ContactForce::zero();
                     continue;
-                }
-                ellipse_ellipse(&a, &b)
+                };
+                c
             }
         };
         let law = model.law(pi.mass, pj.mass);
