@@ -537,6 +537,26 @@ mod tests {
     /// A random pair: semi-major axes 0.05–2, aspect ratios from the checked domain's 0.05 up to discs (one in
     /// eight pairs has a disc, one in eight two equal axes for both), centres from coincident to three times
     /// the sum of the semi-major axes apart (overlapping, touching and separated pairs).
+    /// The pair rounded to f32.
+    fn to_f32(p: &Placed<f64>) -> Placed<f32> {
+        Placed::<f32> {
+            centre: Vector::new(p.centre[0] as f32, p.centre[1] as f32),
+            a: p.a as f32,
+            b: p.b as f32,
+            cos: p.cos as f32,
+            sin: p.sin as f32,
+        }
+    }
+
+    /// The bits of an f32 contact's overlap and normal.
+    fn bits32(c: &Contact<f32>) -> [u32; 3] {
+        [
+            c.overlap.to_bits(),
+            c.normal[0].to_bits(),
+            c.normal[1].to_bits(),
+        ]
+    }
+
     fn random_pair(r: &mut Mix) -> (Placed<f64>, Placed<f64>) {
         let kind = (r.unit() * 8.0) as u32;
         let a1 = r.range(0.05, 2.0);
@@ -605,19 +625,10 @@ mod tests {
         );
         for _ in 0..5_000 {
             let (a, b) = random_pair(&mut r);
-            let f = |p: &Placed<f64>| Placed::<f32> {
-                centre: Vector::new(p.centre[0] as f32, p.centre[1] as f32),
-                a: p.a as f32,
-                b: p.b as f32,
-                cos: p.cos as f32,
-                sin: p.sin as f32,
-            };
-            let (a, b) = (f(&a), f(&b));
+            let (a, b) = (to_f32(&a), to_f32(&b));
             let (c1, _) = ellipse_search(&a, &b, true);
             let (c0, _) = ellipse_search(&a, &b, false);
-            assert_eq!(c1.overlap.to_bits(), c0.overlap.to_bits());
-            assert_eq!(c1.normal[0].to_bits(), c0.normal[0].to_bits());
-            assert_eq!(c1.normal[1].to_bits(), c0.normal[1].to_bits());
+            assert_eq!(bits32(&c1), bits32(&c0));
         }
     }
 
@@ -657,21 +668,10 @@ mod tests {
         );
         for _ in 0..5_000 {
             let (a, b) = random_pair(&mut r);
-            let f = |p: &Placed<f64>| Placed::<f32> {
-                centre: Vector::new(p.centre[0] as f32, p.centre[1] as f32),
-                a: p.a as f32,
-                b: p.b as f32,
-                cos: p.cos as f32,
-                sin: p.sin as f32,
-            };
-            let (a, b) = (f(&a), f(&b));
+            let (a, b) = (to_f32(&a), to_f32(&b));
             let full = ellipse_ellipse(&a, &b);
             match ellipse_ellipse_if_touching(&a, &b) {
-                Some(c) => {
-                    assert_eq!(c.overlap.to_bits(), full.overlap.to_bits());
-                    assert_eq!(c.normal[0].to_bits(), full.normal[0].to_bits());
-                    assert_eq!(c.normal[1].to_bits(), full.normal[1].to_bits());
-                }
+                Some(c) => assert_eq!(bits32(&c), bits32(&full)),
                 None => assert!(!full.is_active()),
             }
         }
