@@ -134,13 +134,31 @@ impl<T: Real> BandOut<'_, T> {
     }
 }
 
+/// A body's cells in one lattice row: `key` = first node << 32 | body (so that sorting by key orders a band's
+/// segments by row, then column, then body), the last node, and the cells `a..e` of the body's list.
+#[derive(Clone, Copy)]
+struct Seg {
+    key: u64,
+    last: u32,
+    a: u32,
+    e: u32,
+}
+
+impl Seg {
+    fn first(&self) -> u32 {
+        (self.key >> 32) as u32
+    }
+    fn body(&self) -> u32 {
+        self.key as u32
+    }
+}
+
 /// One band of rows of a re-mapping that builds the coverage's lists ([`FluidLattice::build_shares`]): its
 /// row segments and scratch, kept between calls.
 #[derive(Default)]
 struct BandPlan {
-    /// (body, first cell, end cell) of the run of each body's cells in each row of the band, row by row, and
-    /// in each row by first node (then body).
-    segs: Vec<(u32, u32, u32)>,
+    /// The band's row segments, row by row, and in each row by first node (then body).
+    segs: Vec<Seg>,
     /// For each row of the band: the end of its segments in `segs`, and whether two of them overlap.
     rows: Vec<(u32, bool)>,
     /// Covered nodes and shares of the band.
@@ -149,45 +167,54 @@ struct BandPlan {
     /// Per-column counters for the rows whose segments overlap, all zero between uses.
     count: Vec<u32>,
     /// The segments of such a row in body order.
-    by_body: Vec<(u32, u32, u32)>,
+    by_body: Vec<Seg>,
     /// ΩΛ: the band's fully covered nodes, increasing.
     full: Vec<u32>,
 }
 
 impl BandPlan {
-    /// The segments of rows `y0..y1` from the bodies `list` meeting them (increasing), and the band's counts.
+    /// The segments of rows `y0..y1` from the bodies `list` meeting them, and the band's counts.
     fn plan(&mut self, cells: &[BodyCells], list: &[u32], y0: usize, y1: usize, nx: usize) {
         self.segs.clear();
         self.rows.clear();
         self.count.resize(nx, 0);
-        let (mut nodes, mut shares) = (0, 0);
-        let first = |&(k, a, _): &(u32, u32, u32)| cells[k as usize].fractions[a as usize].0;
-        let last = |&(k, _, e): &(u32, u32, u32)| cells[k as usize].fractions[e as usize - 1].0;
-        for y in y0..y1 {
-            let start = self.segs.len();
-            for &k in list {
-                let c = &cells[k as usize];
-                let Some([_, _, cy0, cy1]) = c.range else {
-                    continue;
-                };
-                if y < cy0 || y > cy1 {
-                    continue;
-                }
+        // Each body's segments in the band (one visit per body), then all of them in order of their keys.
+        for &k in list {
+            let c = &cells[k as usize];
+            let Some([_, _, cy0, cy1]) = c.range else {
+                continue;
+            };
+            for y in y0.max(cy0)..y1.min(cy1 + 1) {
                 let (a, e) = (c.row_starts[y - cy0], c.row_starts[y - cy0 + 1]);
                 if e > a {
-                    self.segs.push((k, a, e));
+                    self.segs.push(Seg {
+                        key: (u64::from(c.fractions[a as usize].0) << 32) | u64::from(k),
+                        last: c.fractions[e as usize - 1].0,
+                        a,
+                        e,
+                    });
                 }
             }
-            let row = &mut self.segs[start..];
-            row.sort_unstable_by_key(|s| (first(s), s.0));
-            let overlap = row.windows(2).any(|w| last(&w[0]) >= first(&w[1]));
-            let m: usize = row.iter().map(|&(_, a, e)| (e - a) as usize).sum();
+        }
+        self.segs.sort_unstable_by_key(|s| s.key);
+        let (mut nodes, mut shares) = (0, 0);
+        let mut i = 0;
+        for y in y0..y1 {
+            let start = i;
+            let row_end = ((y + 1) * nx) as u32;
+            while i < self.segs.len() && self.segs[i].first() < row_end {
+                i += 1;
+            }
+            let row = &self.segs[start..i];
+            let overlap = row.windows(2).any(|w| w[0].last >= w[1].first());
+            let m: usize = row.iter().map(|s| (s.e - s.a) as usize).sum();
             let n = if overlap {
                 // Distinct nodes of the row, from per-column counters.
                 let base = (y * nx) as u32;
                 let (mut lo, mut hi) = (usize::MAX, 0);
-                for &(k, a, e) in row.iter() {
-                    for &(node, _) in &cells[k as usize].fractions[a as usize..e as usize] {
+                for s in row {
+                    let c = &cells[s.body() as usize];
+                    for &(node, _) in &c.fractions[s.a as usize..s.e as usize] {
                         let x = (node - base) as usize;
                         self.count[x] += 1;
                         lo = lo.min(x);
@@ -202,7 +229,7 @@ impl BandPlan {
             };
             nodes += n;
             shares += m;
-            self.rows.push((self.segs.len() as u32, overlap));
+            self.rows.push((i as u32, overlap));
         }
         self.nodes = nodes;
         self.shares = shares;
@@ -237,9 +264,10 @@ impl BandPlan {
             start = end as usize;
             if !overlap {
                 // One share per node: the segments one after the other.
-                for &(owner, a, e) in row {
+                for seg in row {
+                    let owner = seg.body();
                     let (c, body) = (&cells[owner as usize], &bodies[owner as usize]);
-                    for i in a..e {
+                    for i in seg.a..seg.e {
                         let cell = c.fractions[i as usize];
                         let p = [(cell.0 as usize - base) as f64, y as f64];
                         out.nodes[k] = cell.0;
@@ -257,8 +285,9 @@ impl BandPlan {
             // Shared nodes: each column's shares counted, its counter replaced by the slot of its first share
             // in the row, the shares scattered in body order.
             let (mut lo, mut hi) = (usize::MAX, 0);
-            for &(owner, a, e) in row {
-                for &(node, _) in &cells[owner as usize].fractions[a as usize..e as usize] {
+            for seg in row {
+                let c = &cells[seg.body() as usize];
+                for &(node, _) in &c.fractions[seg.a as usize..seg.e as usize] {
                     let x = node as usize - base;
                     self.count[x] += 1;
                     lo = lo.min(x);
@@ -279,10 +308,11 @@ impl BandPlan {
             }
             self.by_body.clear();
             self.by_body.extend_from_slice(row);
-            self.by_body.sort_unstable_by_key(|s| s.0);
-            for &(owner, a, e) in &self.by_body {
+            self.by_body.sort_unstable_by_key(|s| s.body());
+            for seg in &self.by_body {
+                let owner = seg.body();
                 let (c, body) = (&cells[owner as usize], &bodies[owner as usize]);
-                for i in a..e {
+                for i in seg.a..seg.e {
                     let cell = c.fractions[i as usize];
                     let x = cell.0 as usize - base;
                     let slot = row_share + self.count[x] as usize;
@@ -414,10 +444,13 @@ struct BodyCells {
     key: Option<[u64; 6]>,
     range: Option<[usize; 4]>,
     fractions: Vec<(u32, f64)>,
-    /// The previous call's `fractions` (their buffer is reused for the next ones).
+    /// The previous call's `fractions` and `row_starts` (their buffers are reused for the next ones).
     prev: Vec<(u32, f64)>,
-    /// Whether the nodes of `fractions` differ from the previous call's (in number or in any node).
-    nodes_changed: bool,
+    prev_row_starts: Vec<u32>,
+    /// Whether the last call recomputed the cells (then `prev` and `prev_row_starts` hold the ones before,
+    /// whose range started at row `prev_y0`).
+    recomputed: bool,
+    prev_y0: Option<usize>,
     /// With `range` = [x0, x1, y0, y1]: the index in `fractions` of the first cell of each row y0 ..= y1 + 1
     /// (the last entry is `fractions.len()`), so the cells of rows ya..yb are `fractions[row_starts[ya − y0] ..
     /// row_starts[yb − y0]]` without a search.
@@ -449,22 +482,58 @@ impl BodyCells {
         }
     }
 
-    /// Recompute the cells unless the geometry is bitwise unchanged (nodes on Zou–He sides are skipped), and
-    /// note whether their nodes changed.
+    /// Recompute the cells unless the geometry is bitwise unchanged (nodes on Zou–He sides are skipped), keeping
+    /// the previous ones for [`BodyCells::kept_its_nodes`].
     fn update<T: Real>(&mut self, body: &CoupledBody<f64>, s: &LatticeShape, bc: &Boundaries<T>) {
         let key = Self::geometry_key(body);
-        self.nodes_changed = false;
-        if self.key != Some(key) {
+        self.recomputed = self.key != Some(key);
+        if self.recomputed {
             self.key = Some(key);
             std::mem::swap(&mut self.fractions, &mut self.prev);
+            std::mem::swap(&mut self.row_starts, &mut self.prev_row_starts);
+            self.prev_y0 = self.range.map(|r| r[2]);
             self.recompute(body, s, bc);
-            self.nodes_changed = self.fractions.len() != self.prev.len()
-                || self
-                    .fractions
-                    .iter()
-                    .zip(&self.prev)
-                    .any(|(a, b)| a.0 != b.0);
         }
+    }
+
+    /// Whether the last call left the body on the same nodes as the call before (asked only until one body
+    /// answers no, so that a step where many grains change their cells pays for a few comparisons).
+    fn kept_its_nodes(&self) -> bool {
+        !self.recomputed || self.same_nodes_as_prev(self.prev_y0)
+    }
+
+    /// Whether `fractions` has exactly the nodes of `prev` (first row `prev_y0` of the previous range). Row by
+    /// row where it can: two rows with the same count, first and last node, whose nodes are consecutive (count
+    /// = last − first + 1), hold the same nodes; otherwise node by node. May answer `false` for equal lists
+    /// (a range that moved by an empty row), never `true` for different ones.
+    fn same_nodes_as_prev(&self, prev_y0: Option<usize>) -> bool {
+        if self.fractions.len() != self.prev.len() {
+            return false;
+        }
+        if self.fractions.is_empty() {
+            return true;
+        }
+        if self.range.map(|r| r[2]) != prev_y0 || self.row_starts != self.prev_row_starts {
+            return false;
+        }
+        let mut consecutive = true;
+        for w in self.row_starts.windows(2) {
+            let (a, e) = (w[0] as usize, w[1] as usize);
+            if e == a {
+                continue;
+            }
+            let (first, last) = (self.fractions[a].0, self.fractions[e - 1].0);
+            if first != self.prev[a].0 || last != self.prev[e - 1].0 {
+                return false;
+            }
+            consecutive &= (last - first) as usize + 1 == e - a;
+        }
+        consecutive
+            || self
+                .fractions
+                .iter()
+                .zip(&self.prev)
+                .all(|(a, b)| a.0 == b.0)
     }
 
     fn recompute<T: Real>(
@@ -473,18 +542,13 @@ impl BodyCells {
         s: &LatticeShape,
         bc: &Boundaries<T>,
     ) {
-        self.recompute_cells(body, s, bc);
-        // Where each row's cells start (one pass over the cells, in node order).
         self.row_starts.clear();
+        self.recompute_cells(body, s, bc);
+        // Where each row's cells start: recorded row by row as the cells were pushed, completed here for rows
+        // after the last one pushed (none when no row was).
         if let Some([_, _, y0, y1]) = self.range {
-            let mut i = 0;
-            for y in y0..=y1 + 1 {
-                let first = (y * s.nx) as u32;
-                while i < self.fractions.len() && self.fractions[i].0 < first {
-                    i += 1;
-                }
-                self.row_starts.push(i as u32);
-            }
+            let end = self.fractions.len() as u32;
+            self.row_starts.resize(y1 - y0 + 2, end);
         }
     }
 
@@ -505,7 +569,9 @@ impl BodyCells {
         }
         let prepared = PreparedBody::new(body);
         let classify = EllipseCells::new(body);
+        self.row_starts.clear();
         for y in y0..=y1 {
+            self.row_starts.push(self.fractions.len() as u32);
             for x in x0..=x1 {
                 if on_zou_he_side(s, bc, x, y) {
                     continue;
@@ -600,7 +666,10 @@ impl BodyCells {
         ) else {
             return true;
         };
+        // Row starts of rows y0..ya (none of their cells are kept), then each row's as it is reached.
+        self.row_starts.resize(ya - y0, 0);
         for y in ya..=yb {
+            self.row_starts.push(self.fractions.len() as u32);
             let row = (y - y0 + gy) * grid.w;
             // The row's boundary cells in the whole block row (its covered cells lie from the first to the last,
             // also where the lattice cuts the block), then the lattice part's columns of the block.
@@ -1146,7 +1215,7 @@ impl<T: Real> FluidLattice<T> {
                 .coverage
                 .as_ref()
                 .is_some_and(|c| c.shares.len() == scratch.src.len())
-            && !scratch.bodies.iter().any(|c| c.nodes_changed);
+            && scratch.bodies.iter().all(BodyCells::kept_its_nodes);
         let mut cov = match self.coverage.take() {
             Some(mut cov) if same_layout => {
                 Self::update_shares_in_place(scratch, &mut cov, bodies, lambda, &mut full_now);
@@ -2414,6 +2483,59 @@ mod tests {
         // Bodies jump up to two cells a step, far from a physical motion: only ask for finite populations, so
         // that the bitwise comparison above compared numbers.
         assert!(incremental.populations().iter().all(|v| v.is_finite()));
+    }
+
+    /// The row-wise comparison of a body's nodes with the previous call's: equal lists are recognised (rows of
+    /// consecutive nodes from their ends, rows with a gap node by node), and no different list is taken for
+    /// an equal one, including lists that agree in every row's count, first and last node.
+    #[test]
+    fn a_bodys_nodes_are_compared_exactly_with_the_previous_calls() {
+        let cells = |rows: &[&[u32]], y0: usize| {
+            let mut c = BodyCells {
+                range: Some([0, 9, y0, y0 + rows.len() - 1]),
+                ..BodyCells::default()
+            };
+            for row in rows {
+                c.row_starts.push(c.fractions.len() as u32);
+                c.fractions.extend(row.iter().map(|&n| (n, 0.5)));
+            }
+            c.row_starts.push(c.fractions.len() as u32);
+            c
+        };
+        let compare = |now: &[&[u32]], y0: usize, before: &[&[u32]], prev_y0: usize| {
+            let mut c = cells(now, y0);
+            let p = cells(before, prev_y0);
+            c.prev = p.fractions;
+            c.prev_row_starts = p.row_starts;
+            c.same_nodes_as_prev(Some(prev_y0))
+        };
+        let runs: &[&[u32]] = &[&[12, 13, 14], &[], &[31, 32, 33, 34]];
+        assert!(compare(runs, 1, runs, 1));
+        // One node more, one less, a row shifted, another first row.
+        assert!(!compare(
+            &[&[12, 13, 14, 15], &[], &[31, 32, 33, 34]],
+            1,
+            runs,
+            1
+        ));
+        assert!(!compare(&[&[12, 13], &[], &[31, 32, 33, 34]], 1, runs, 1));
+        assert!(!compare(
+            &[&[12, 13, 14], &[], &[32, 33, 34, 35]],
+            1,
+            runs,
+            1
+        ));
+        assert!(!compare(runs, 2, runs, 1));
+        // Rows with a gap (a cell whose fraction rounded to zero): same count, first and last node, other
+        // nodes — decided node by node.
+        let gap: &[&[u32]] = &[&[12, 14, 15], &[], &[31, 32, 33, 34]];
+        let other_gap: &[&[u32]] = &[&[12, 13, 15], &[], &[31, 32, 33, 34]];
+        assert!(compare(gap, 1, gap, 1));
+        assert!(!compare(gap, 1, other_gap, 1));
+        assert!(!compare(other_gap, 1, gap, 1));
+        // Nothing before or now.
+        assert!(compare(&[&[]], 1, &[&[]], 1));
+        assert!(!compare(runs, 1, &[&[], &[], &[]], 1));
     }
 
     #[test]
