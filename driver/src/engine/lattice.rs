@@ -1265,8 +1265,8 @@ impl<T: Real> FluidLattice<T> {
     /// in body order. Both give the shares of each node in increasing body order, so the lists do not depend
     /// on the band size or the thread count. (In the full-size fracture run no two grains share a node, and
     /// 10–20 % of the grains change their set of cells at each step, so nearly every call builds the lists;
-    /// building the rows this way instead of with per-node counters over whole bands took 10–17 % off the
-    /// coupled step there; README, *Benchmarks*.)
+    /// building the rows this way instead of with per-node counters over whole bands, with the changes that
+    /// went with it, took 7–10 % off the coupled step there; README, *Benchmarks*.)
     fn build_shares(
         scratch: &mut CoverScratch,
         shape: &LatticeShape,
