@@ -153,6 +153,27 @@ impl Seg {
     }
 }
 
+/// Count the shares of each column of a row (first node `base`) from its segments into `count`; the first and
+/// last column counted (the row has at least one segment).
+fn count_columns(
+    count: &mut [u32],
+    cells: &[BodyCells],
+    row: &[Seg],
+    base: usize,
+) -> (usize, usize) {
+    let (mut lo, mut hi) = (usize::MAX, 0);
+    for seg in row {
+        let c = &cells[seg.body() as usize];
+        for &(node, _) in &c.fractions[seg.a as usize..seg.e as usize] {
+            let x = node as usize - base;
+            count[x] += 1;
+            lo = lo.min(x);
+            hi = hi.max(x);
+        }
+    }
+    (lo, hi)
+}
+
 /// One band of rows of a re-mapping that builds the coverage's lists ([`FluidLattice::build_shares`]): its
 /// row segments and scratch, kept between calls.
 #[derive(Default)]
@@ -210,17 +231,7 @@ impl BandPlan {
             let m: usize = row.iter().map(|s| (s.e - s.a) as usize).sum();
             let n = if overlap {
                 // Distinct nodes of the row, from per-column counters.
-                let base = (y * nx) as u32;
-                let (mut lo, mut hi) = (usize::MAX, 0);
-                for s in row {
-                    let c = &cells[s.body() as usize];
-                    for &(node, _) in &c.fractions[s.a as usize..s.e as usize] {
-                        let x = (node - base) as usize;
-                        self.count[x] += 1;
-                        lo = lo.min(x);
-                        hi = hi.max(x);
-                    }
-                }
+                let (lo, hi) = count_columns(&mut self.count, cells, row, y * nx);
                 let n = self.count[lo..=hi].iter().filter(|&&c| c > 0).count();
                 self.count[lo..=hi].fill(0);
                 n
@@ -247,14 +258,6 @@ impl BandPlan {
         out: &mut BandOut<'_, T>,
     ) {
         self.full.clear();
-        let is_full = |shares: &[SolidShare<T>]| {
-            // The sum the collision forms (same order), compared as the collision compares it.
-            let mut eps = T::zero();
-            for sh in shares {
-                eps += sh.fraction;
-            }
-            lbdem_kernels::fluid::collide::lambda_fully_covered(eps)
-        };
         let (mut k, mut sh) = (0usize, 0usize);
         let mut start = 0;
         for (r, &(end, overlap)) in self.rows.iter().enumerate() {
@@ -273,7 +276,7 @@ impl BandPlan {
                         out.nodes[k] = cell.0;
                         out.offsets[k] = out.first_share + sh as u32;
                         out.put(sh, owner, i, cell.1, p, body);
-                        if lambda && is_full(&out.shares[sh..=sh]) {
+                        if lambda && shares_are_full(&out.shares[sh..=sh]) {
                             self.full.push(cell.0);
                         }
                         k += 1;
@@ -284,16 +287,7 @@ impl BandPlan {
             }
             // Shared nodes: each column's shares counted, its counter replaced by the slot of its first share
             // in the row, the shares scattered in body order.
-            let (mut lo, mut hi) = (usize::MAX, 0);
-            for seg in row {
-                let c = &cells[seg.body() as usize];
-                for &(node, _) in &c.fractions[seg.a as usize..seg.e as usize] {
-                    let x = node as usize - base;
-                    self.count[x] += 1;
-                    lo = lo.min(x);
-                    hi = hi.max(x);
-                }
-            }
+            let (lo, hi) = count_columns(&mut self.count, cells, row, base);
             let (row_share, row_node) = (sh, k);
             let mut at = 0u32;
             for x in lo..=hi {
@@ -330,7 +324,7 @@ impl BandPlan {
                     } else {
                         sh
                     };
-                    if is_full(&out.shares[a..b]) {
+                    if shares_are_full(&out.shares[a..b]) {
                         self.full.push(out.nodes[j]);
                     }
                 }
@@ -824,8 +818,14 @@ struct Coverage<T> {
 /// Whether covered node `k` of `cov` is fully covered for ΩΛ: the sum the collision forms (same order),
 /// compared as the collision compares it.
 fn node_is_full<T: Real>(cov: &Coverage<T>, k: usize) -> bool {
+    shares_are_full(&cov.shares[cov.offsets[k] as usize..cov.offsets[k + 1] as usize])
+}
+
+/// Whether a node with these shares is fully covered for ΩΛ: their fractions summed in the collision's order,
+/// compared as the collision compares them.
+fn shares_are_full<T: Real>(shares: &[SolidShare<T>]) -> bool {
     let mut eps = T::zero();
-    for s in &cov.shares[cov.offsets[k] as usize..cov.offsets[k + 1] as usize] {
+    for s in shares {
         eps += s.fraction;
     }
     lbdem_kernels::fluid::collide::lambda_fully_covered(eps)
