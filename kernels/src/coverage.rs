@@ -18,6 +18,9 @@
 //! theorem, with one transcendental per crossing of the ellipse with a lattice line (shared by the two cells the
 //! crossing separates) instead of up to eight per boundary cell; also exact up to roundoff (not bitwise the
 //! per-cell formula), and it refuses the rare ellipse with a crossing within roundoff reach of a lattice vertex.
+//! It computes the crossings of eight lattice lines at a time over lanes (roots, positions and angles, the
+//! angles by `Real::portable_atan2_lanes`), which the compiler vectorises; each lane gets the bits it would get
+//! alone, so the fractions do not depend on the instruction set.
 use crate::math::Point;
 use crate::Real;
 
@@ -320,6 +323,127 @@ fn interval_and_gap<T: Real>(t: T, o: T, n: usize) -> (usize, T) {
     (i, gap)
 }
 
+/// Lattice lines whose crossings [`ellipse_grid_fractions`] computes together, over lanes (the compiler
+/// vectorises the lane loops; every lane gets the bits the line would get alone).
+const LINE_LANES: usize = 8;
+
+/// The crossings of up to [`LINE_LANES`] parallel lattice lines with the unit disc, in the ellipse's frame
+/// ([`line_crossings`]); lane l is line `first + l`.
+struct LineCrossings<T> {
+    /// The line meets the open disc (the other entries of a lane that does not are unspecified).
+    meets: [bool; LINE_LANES],
+    /// ⌊(t − o)⌋ of the lower and upper crossing, t its coordinate along the line in lattice units and o the
+    /// block's first lattice line across it, and the distance of t − o to the nearest integer (to the nearest
+    /// lattice line across).
+    lo: [T; LINE_LANES],
+    gap_lo: [T; LINE_LANES],
+    hi: [T; LINE_LANES],
+    gap_hi: [T; LINE_LANES],
+    /// The crossings in the ellipse's frame, and half their angle from the reference direction.
+    p_lo: [[T; 2]; LINE_LANES],
+    p_hi: [[T; 2]; LINE_LANES],
+    f_lo: [T; LINE_LANES],
+    f_hi: [T; LINE_LANES],
+}
+
+/// The crossings with the unit disc of the lines `first .. first + count` (count ≤ [`LINE_LANES`]), line i
+/// being base(i) + s d (s in lattice units along the line, whose coordinate is `along.0 + s`; `along.1` is
+/// the block's first line across it), angles measured from `r`. The same operations as for one line at a time
+/// (the roots of |base + s d|² = 1 without cancellation, ⌊·⌋ and the gap to the nearest line, the points, and
+/// their angles by [`Real::portable_atan2_lanes`], bitwise `portable_atan2`), each lane on its own values;
+/// lanes past `count` repeat line `first`, and a line that misses the disc gets harmless angle arguments.
+#[inline(always)]
+fn line_crossings<T: Real>(
+    base: impl Fn(usize) -> [T; 2],
+    d: [T; 2],
+    first: usize,
+    count: usize,
+    (along, o): (T, T),
+    r: [T; 2],
+) -> LineCrossings<T> {
+    let zero = T::zero();
+    let mut out = LineCrossings {
+        meets: [false; LINE_LANES],
+        lo: [zero; LINE_LANES],
+        gap_lo: [zero; LINE_LANES],
+        hi: [zero; LINE_LANES],
+        gap_hi: [zero; LINE_LANES],
+        p_lo: [[zero; 2]; LINE_LANES],
+        p_hi: [[zero; 2]; LINE_LANES],
+        f_lo: [zero; LINE_LANES],
+        f_hi: [zero; LINE_LANES],
+    };
+    let (mut y, mut x) = ([zero; 2 * LINE_LANES], [zero; 2 * LINE_LANES]);
+    let qa = dot(d, d);
+    let (half, one) = (T::lit(0.5), T::one());
+    for l in 0..LINE_LANES {
+        let b = base(first + if l < count { l } else { 0 });
+        // Roots s_lo ≤ s_hi of |b + s d|² = 1, the stable pair (no cancellation in either).
+        let qb = dot(b, d);
+        let qc = dot(b, b) - one;
+        let disc = qb * qb - qa * qc;
+        let q = -(qb + disc.sqrt().copysign(qb));
+        let meets = disc > zero && qa > zero && q != zero;
+        let (s1, s2) = (q / qa, qc / q);
+        let (s_lo, s_hi) = (s1.min(s2), s1.max(s2));
+        let (fl, gl) = floor_and_gap(along + s_lo - o);
+        let (fh, gh) = floor_and_gap(along + s_hi - o);
+        let p_lo = [b[0] + s_lo * d[0], b[1] + s_lo * d[1]];
+        let p_hi = [b[0] + s_hi * d[0], b[1] + s_hi * d[1]];
+        out.meets[l] = meets;
+        (out.lo[l], out.gap_lo[l], out.hi[l], out.gap_hi[l]) = (fl, gl, fh, gh);
+        (out.p_lo[l], out.p_hi[l]) = (p_lo, p_hi);
+        // Where the line misses the disc, the angle of (2, ½) (any ordinary pair would do).
+        let (a_lo, a_hi) = if meets {
+            (
+                [cross(r, p_lo), dot(r, p_lo)],
+                [cross(r, p_hi), dot(r, p_hi)],
+            )
+        } else {
+            ([half, one + one], [half, one + one])
+        };
+        (y[l], x[l]) = (a_lo[0], a_lo[1]);
+        (y[LINE_LANES + l], x[LINE_LANES + l]) = (a_hi[0], a_hi[1]);
+    }
+    let angle = T::portable_atan2_lanes(&y, &x);
+    for l in 0..LINE_LANES {
+        out.f_lo[l] = half * angle[l];
+        out.f_hi[l] = half * angle[LINE_LANES + l];
+    }
+    out
+}
+
+/// ⌊v⌋ and the distance from v to the nearest integer, without a library call or a branch (so that it
+/// vectorises): v rounded to an integer by adding and subtracting 1/ε (ε the machine epsilon; the sum's ulp
+/// is 1), less one where that rounded up. Bitwise `v.floor()` for |v| < 1/(2ε) except at v = −0 (which gives
+/// +0; the gap is the same). Outside that range the gap is NaN, which every caller's `gap > margin` refuses.
+#[inline(always)]
+fn floor_and_gap<T: Real>(v: T) -> (T, T) {
+    let big = T::one() / T::epsilon();
+    let m = big.copysign(v);
+    let r = (v + m) - m;
+    let f = if r > v { r - T::one() } else { r };
+    let frac = v - f;
+    let gap = frac.min(T::one() - frac);
+    let gap = if v.abs() < T::lit(0.5) * big {
+        gap
+    } else {
+        T::nan()
+    };
+    (f, gap)
+}
+
+/// The index of the unit interval a floored coordinate `f` ([`floor_and_gap`]) falls in, clamped to `0 .. n`.
+#[inline(always)]
+fn interval<T: Real>(f: T, n: usize) -> usize {
+    let i = f.to_f64_exact();
+    if i > 0.0 {
+        (i as usize).min(n - 1)
+    } else {
+        0
+    }
+}
+
 /// Cell fractions of **all** cells of `grid` covered by the ellipse (centre `c`, semi-axes `a`, `b`, orientation
 /// given as `(sin θ, cos θ)`), each transcendental evaluated once per crossing of the ellipse with a lattice
 /// line instead of up to eight times per cell ([`ellipse_cell_fraction_oriented`]). Writes the fraction of
@@ -343,6 +467,7 @@ fn interval_and_gap<T: Real>(t: T, o: T, n: usize) -> (usize, T) {
 /// margin (≈ 1.5e-6 (1 + max(a, b)) in f64) of a lattice vertex, where roundoff could order the crossings
 /// wrongly, or every candidate cut does — or when the sizes are invalid or the buffers shorter than the grid:
 /// the caller then uses the per-cell formula [`ellipse_cell_fraction_oriented`].
+#[inline(always)]
 pub fn ellipse_grid_fractions<T: Real>(
     c: Point<T>,
     a: T,
@@ -402,108 +527,117 @@ pub fn ellipse_grid_fractions<T: Real>(
     let Some((u_cut, cut_cell)) = cut else {
         return false;
     };
-    // Angle of P from the reference direction r = −u_cut, in (−π, π]: discontinuous only at u_cut.
+    // Angles of points P are measured from the reference direction r = −u_cut, in (−π, π]: discontinuous only
+    // at u_cut.
     let r = [-u_cut[0], -u_cut[1]];
-    let angle = |p: [T; 2]| cross(r, p).portable_atan2(dot(r, p));
-    // Roots s_lo ≤ s_hi of |base + s d|² = 1, if the line meets the open disc.
-    let roots = |base: [T; 2], d: [T; 2]| -> Option<(T, T)> {
-        let qa = dot(d, d);
-        let qb = dot(base, d);
-        let qc = dot(base, base) - T::one();
-        let disc = qb * qb - qa * qc;
-        if !(disc > T::zero()) || !(qa > T::zero()) {
-            return None;
-        }
-        // The stable pair of roots: no cancellation in either.
-        let q = -(qb + disc.sqrt().copysign(qb));
-        if q == T::zero() {
-            return None;
-        }
-        let (s1, s2) = (q / qa, qc / q);
-        Some((s1.min(s2), s1.max(s2)))
-    };
-    let at = |base: [T; 2], d: [T; 2], s: T| [base[0] + s * d[0], base[1] + s * d[1]];
-    // Vertical lines (the outermost two lie strictly outside the bounding circle).
+    // Vertical lines (the outermost two lie strictly outside the bounding circle), LINE_LANES at a time: their
+    // crossings computed over lanes, then added to the cells line by line, in order.
     let dv = [sin * ia, cos * ib];
-    for i in 1..w {
-        let x = xl + T::lit(i as f64);
-        let dx = x - c[0];
-        let base = [cos * dx * ia, -(sin * dx) * ib];
-        let Some((s_lo, s_hi)) = roots(base, dv) else {
-            continue;
-        };
-        let (t_lo, t_hi) = (c[1] + s_lo, c[1] + s_hi);
-        let (row_lo, g_lo) = interval_and_gap(t_lo, yl, h);
-        let (row_hi, g_hi) = interval_and_gap(t_hi, yl, h);
-        if !(g_lo > margin && g_hi > margin) {
-            return false;
+    let mut i0 = 1;
+    while i0 < w {
+        let count = (w - i0).min(LINE_LANES);
+        let x_of = |i: usize| xl + T::lit(i as f64);
+        let lines = line_crossings(
+            |i| {
+                let dx = x_of(i) - c[0];
+                [cos * dx * ia, -(sin * dx) * ib]
+            },
+            dv,
+            i0,
+            count,
+            (c[1], yl),
+            r,
+        );
+        for l in 0..count {
+            if !lines.meets[l] {
+                continue;
+            }
+            if !(lines.gap_lo[l] > margin && lines.gap_hi[l] > margin) {
+                return false;
+            }
+            let (i, x) = (i0 + l, x_of(i0 + l));
+            let (row_lo, row_hi) = (interval(lines.lo[l], h), interval(lines.hi[l], h));
+            let (p_lo, p_hi) = (lines.p_lo[l], lines.p_hi[l]);
+            let (f_lo, f_hi) = (lines.f_lo[l], lines.f_hi[l]);
+            // Lower crossing: from the left column to the right one; upper crossing: back.
+            let (left_lo, right_lo) = (row_lo * w + i - 1, row_lo * w + i);
+            fr[left_lo] += f_lo;
+            fr[right_lo] -= f_lo;
+            let (left_hi, right_hi) = (row_hi * w + i - 1, row_hi * w + i);
+            fr[right_hi] += f_hi;
+            fr[left_hi] -= f_hi;
+            for k in [left_lo, right_lo, left_hi, right_hi] {
+                bd[k] = true;
+            }
+            // Upward pieces: the right edge of the left cell (+), the left edge of the right cell (−).
+            let mut from = p_lo;
+            for j in row_lo..=row_hi {
+                let to = if j == row_hi {
+                    p_hi
+                } else {
+                    map(x, yl + T::lit((j + 1) as f64))
+                };
+                let piece = half * cross(from, to);
+                fr[j * w + i - 1] += piece;
+                fr[j * w + i] -= piece;
+                from = to;
+            }
         }
-        let (p_lo, p_hi) = (at(base, dv, s_lo), at(base, dv, s_hi));
-        let (f_lo, f_hi) = (half * angle(p_lo), half * angle(p_hi));
-        // Lower crossing: from the left column to the right one; upper crossing: back.
-        let (left_lo, right_lo) = (row_lo * w + i - 1, row_lo * w + i);
-        fr[left_lo] += f_lo;
-        fr[right_lo] -= f_lo;
-        let (left_hi, right_hi) = (row_hi * w + i - 1, row_hi * w + i);
-        fr[right_hi] += f_hi;
-        fr[left_hi] -= f_hi;
-        for k in [left_lo, right_lo, left_hi, right_hi] {
-            bd[k] = true;
-        }
-        // Upward pieces: the right edge of the left cell (+), the left edge of the right cell (−).
-        let mut from = p_lo;
-        for j in row_lo..=row_hi {
-            let to = if j == row_hi {
-                p_hi
-            } else {
-                map(x, yl + T::lit((j + 1) as f64))
-            };
-            let piece = half * cross(from, to);
-            fr[j * w + i - 1] += piece;
-            fr[j * w + i] -= piece;
-            from = to;
-        }
+        i0 += LINE_LANES;
     }
-    // Horizontal lines.
+    // Horizontal lines, the same way.
     let dh = [cos * ia, -(sin * ib)];
-    for j in 1..h {
-        let y = yl + T::lit(j as f64);
-        let dy = y - c[1];
-        let base = [sin * dy * ia, cos * dy * ib];
-        let Some((s_lo, s_hi)) = roots(base, dh) else {
-            continue;
-        };
-        let (t_lo, t_hi) = (c[0] + s_lo, c[0] + s_hi);
-        let (col_lo, g_lo) = interval_and_gap(t_lo, xl, w);
-        let (col_hi, g_hi) = interval_and_gap(t_hi, xl, w);
-        if !(g_lo > margin && g_hi > margin) {
-            return false;
+    let mut j0 = 1;
+    while j0 < h {
+        let count = (h - j0).min(LINE_LANES);
+        let y_of = |j: usize| yl + T::lit(j as f64);
+        let lines = line_crossings(
+            |j| {
+                let dy = y_of(j) - c[1];
+                [sin * dy * ia, cos * dy * ib]
+            },
+            dh,
+            j0,
+            count,
+            (c[0], xl),
+            r,
+        );
+        for l in 0..count {
+            if !lines.meets[l] {
+                continue;
+            }
+            if !(lines.gap_lo[l] > margin && lines.gap_hi[l] > margin) {
+                return false;
+            }
+            let (j, y) = (j0 + l, y_of(j0 + l));
+            let (col_lo, col_hi) = (interval(lines.lo[l], w), interval(lines.hi[l], w));
+            let (p_lo, p_hi) = (lines.p_lo[l], lines.p_hi[l]);
+            let (f_lo, f_hi) = (lines.f_lo[l], lines.f_hi[l]);
+            // Left crossing: from the row above to the row below; right crossing: back.
+            let (above_lo, below_lo) = (j * w + col_lo, (j - 1) * w + col_lo);
+            fr[above_lo] += f_lo;
+            fr[below_lo] -= f_lo;
+            let (above_hi, below_hi) = (j * w + col_hi, (j - 1) * w + col_hi);
+            fr[below_hi] += f_hi;
+            fr[above_hi] -= f_hi;
+            for k in [above_lo, below_lo, above_hi, below_hi] {
+                bd[k] = true;
+            }
+            // Rightward pieces: the bottom edge of the cell above (+), the top edge of the cell below (−).
+            let mut from = p_lo;
+            for k in col_lo..=col_hi {
+                let to = if k == col_hi {
+                    p_hi
+                } else {
+                    map(xl + T::lit((k + 1) as f64), y)
+                };
+                let piece = half * cross(from, to);
+                fr[j * w + k] += piece;
+                fr[(j - 1) * w + k] -= piece;
+                from = to;
+            }
         }
-        let (p_lo, p_hi) = (at(base, dh, s_lo), at(base, dh, s_hi));
-        let (f_lo, f_hi) = (half * angle(p_lo), half * angle(p_hi));
-        // Left crossing: from the row above to the row below; right crossing: back.
-        let (above_lo, below_lo) = (j * w + col_lo, (j - 1) * w + col_lo);
-        fr[above_lo] += f_lo;
-        fr[below_lo] -= f_lo;
-        let (above_hi, below_hi) = (j * w + col_hi, (j - 1) * w + col_hi);
-        fr[below_hi] += f_hi;
-        fr[above_hi] -= f_hi;
-        for k in [above_lo, below_lo, above_hi, below_hi] {
-            bd[k] = true;
-        }
-        // Rightward pieces: the bottom edge of the cell above (+), the top edge of the cell below (−).
-        let mut from = p_lo;
-        for k in col_lo..=col_hi {
-            let to = if k == col_hi {
-                p_hi
-            } else {
-                map(xl + T::lit((k + 1) as f64), y)
-            };
-            let piece = half * cross(from, to);
-            fr[j * w + k] += piece;
-            fr[(j - 1) * w + k] -= piece;
-            from = to;
-        }
+        j0 += LINE_LANES;
     }
     fr[cut_cell] += T::PI();
     bd[cut_cell] = true;
@@ -577,6 +711,49 @@ mod tests {
             for v in [x, x.next_up(), x.next_down(), x * 1e7, x * 1e-9] {
                 check(v);
             }
+        }
+    }
+
+    /// The branch-free floor of the lane loops is bitwise `floor` (up to the sign of a zero) over its range, its
+    /// gap is the distance to the nearest integer as [`interval_and_gap`] computes it, and outside the range the
+    /// gap is NaN (refused by every caller's `gap > margin`).
+    #[test]
+    fn branch_free_floor_is_floor_and_its_gap_the_distance_to_an_integer() {
+        fn check<T: Real>(v: T) {
+            let (f, gap) = floor_and_gap(v);
+            let want = v.floor();
+            assert!(f == want, "{v:?}: {f:?} against {want:?}");
+            let frac = v - want;
+            assert!(
+                gap.to_f64_exact().to_bits() == frac.min(T::one() - frac).to_f64_exact().to_bits()
+                    || (gap == T::zero() && frac == T::zero()),
+                "{v:?}"
+            );
+            let (i, g) = interval_and_gap(v, T::zero(), usize::MAX);
+            assert_eq!(g, gap, "{v:?}");
+            assert_eq!(interval(f, usize::MAX), i, "{v:?}");
+        }
+        for k in -4000..=4000 {
+            let x = k as f64 * 0.125;
+            for v in [x, x.next_up(), x.next_down(), x * 1e5 + 0.5, x * 1e-9] {
+                check(v);
+                if v.abs() < 4.0e6 {
+                    // f32's range ends at 2^22.
+                    check(v as f32);
+                }
+            }
+        }
+        for v in [0.0, -0.0, 2.0e15 + 0.5, -2.0e15 - 0.5, 2.25e15 - 1.0] {
+            check(v);
+        }
+        for v in [4.0e6f32 + 0.5, -4.0e6 - 0.5] {
+            check(v);
+        }
+        for v in [2.26e15, -2.26e15, -1e300, f64::INFINITY, f64::NAN] {
+            assert!(floor_and_gap(v).1.is_nan(), "{v:e}");
+        }
+        for v in [4.2e6f32, -1e30] {
+            assert!(floor_and_gap(v).1.is_nan(), "{v:e}");
         }
     }
 

@@ -21,6 +21,7 @@ pub mod coupling;
 pub mod coverage;
 pub mod dem;
 pub mod fluid;
+mod lanes;
 pub mod math;
 mod real;
 

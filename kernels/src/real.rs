@@ -44,6 +44,13 @@ pub trait Real:
     }
     /// atan2(self, x), from the `libm` crate.
     fn portable_atan2(self, x: Self) -> Self;
+    /// [`Real::portable_atan2`] of every lane, `y[l].portable_atan2(x[l])`: the same bits, computed a batch at a
+    /// time (f64: `libm`'s algorithm written over the lanes so that the compiler vectorises it; f32: lane by
+    /// lane).
+    #[inline(always)]
+    fn portable_atan2_lanes<const L: usize>(y: &[Self; L], x: &[Self; L]) -> [Self; L] {
+        core::array::from_fn(|l| y[l].portable_atan2(x[l]))
+    }
     /// hypot(self, y), from the `libm` crate.
     fn portable_hypot(self, y: Self) -> Self;
     /// Natural logarithm, from the `libm` crate.
@@ -71,6 +78,10 @@ impl Real for f64 {
     #[inline]
     fn portable_atan2(self, x: Self) -> Self {
         libm::atan2(self, x)
+    }
+    #[inline(always)]
+    fn portable_atan2_lanes<const L: usize>(y: &[Self; L], x: &[Self; L]) -> [Self; L] {
+        crate::lanes::atan2_f64(y, x)
     }
     #[inline]
     fn portable_hypot(self, y: Self) -> Self {

@@ -478,7 +478,13 @@ impl BodyCells {
 
     /// Recompute the cells unless the geometry is bitwise unchanged (nodes on Zou–He sides are skipped), keeping
     /// the previous ones for [`BodyCells::kept_its_nodes`].
-    fn update<T: Real>(&mut self, body: &CoupledBody<f64>, s: &LatticeShape, bc: &Boundaries<T>) {
+    fn update<T: Real>(
+        &mut self,
+        body: &CoupledBody<f64>,
+        s: &LatticeShape,
+        bc: &Boundaries<T>,
+        simd: SimdLevel,
+    ) {
         let key = Self::geometry_key(body);
         self.recomputed = self.key != Some(key);
         if self.recomputed {
@@ -486,7 +492,7 @@ impl BodyCells {
             std::mem::swap(&mut self.fractions, &mut self.prev);
             std::mem::swap(&mut self.row_starts, &mut self.prev_row_starts);
             self.prev_y0 = self.range.map(|r| r[2]);
-            self.recompute(body, s, bc);
+            self.recompute(body, s, bc, simd);
         }
     }
 
@@ -535,9 +541,10 @@ impl BodyCells {
         body: &CoupledBody<f64>,
         s: &LatticeShape,
         bc: &Boundaries<T>,
+        simd: SimdLevel,
     ) {
         self.row_starts.clear();
-        self.recompute_cells(body, s, bc);
+        self.recompute_cells(body, s, bc, simd);
         // Where each row's cells start: recorded row by row as the cells were pushed, completed here for rows
         // after the last one pushed (none when no row was).
         if let Some([_, _, y0, y1]) = self.range {
@@ -552,13 +559,14 @@ impl BodyCells {
         body: &CoupledBody<f64>,
         s: &LatticeShape,
         bc: &Boundaries<T>,
+        simd: SimdLevel,
     ) {
         self.fractions.clear();
         self.range = body_cell_range(body, s.nx, s.ny);
         let Some([x0, x1, y0, y1]) = self.range else {
             return;
         };
-        if self.recompute_ellipse(body, s, bc) {
+        if self.recompute_ellipse(body, s, bc, simd) {
             return;
         }
         let prepared = PreparedBody::new(body);
@@ -615,6 +623,7 @@ impl BodyCells {
         body: &CoupledBody<f64>,
         s: &LatticeShape,
         bc: &Boundaries<T>,
+        simd: SimdLevel,
     ) -> bool {
         let Some([x0, x1, y0, y1]) = self.range else {
             return false;
@@ -625,14 +634,14 @@ impl BodyCells {
         };
         self.grid_fractions.resize(n, 0.0);
         self.grid_boundary.resize(n, false);
-        if !ellipse_grid_fractions(
-            body.center,
-            semi_major,
-            semi_minor,
-            angle.portable_sin_cos(),
-            grid,
-            &mut self.grid_fractions,
-            &mut self.grid_boundary,
+        // Compiled for the lattice's SIMD level: the kernel computes the crossings of eight lattice lines at a
+        // time over lanes (same bits at every level).
+        let sin_cos = angle.portable_sin_cos();
+        let (fr, bd) = (&mut self.grid_fractions, &mut self.grid_boundary);
+        if !with_simd(
+            simd,
+            #[inline(always)]
+            || ellipse_grid_fractions(body.center, semi_major, semi_minor, sin_cos, grid, fr, bd),
         ) {
             return false;
         }
@@ -1197,13 +1206,14 @@ impl<T: Real> FluidLattice<T> {
         //    shared by the two cells it separates); discs, and the rare ellipse the pass refuses, take the
         //    per-cell exact formula on the cells near their boundary. A body whose geometry is bitwise unchanged
         //    since the last call keeps its cell fractions. The rigid velocities are evaluated in step 4.
+        let simd = self.simd;
         let scratch = &mut self.cover_scratch;
         scratch.bodies.resize_with(bodies.len(), BodyCells::default);
         scratch
             .bodies
             .par_iter_mut()
             .zip(bodies.par_iter())
-            .for_each(|(cells, body)| cells.update(body, &s, &bc));
+            .for_each(|(cells, body)| cells.update(body, &s, &bc, simd));
         // 2.–4. The coverage's lists: rewritten in place when every body covers the same nodes as at the last
         //    call and that call built them, otherwise built anew.
         let lambda = self.solid_operator == SolidOperator::LambdaConsistent;
