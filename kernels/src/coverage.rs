@@ -413,6 +413,48 @@ fn line_crossings<T: Real>(
     out
 }
 
+/// Rows of a cell block for which [`ellipse_grid_fractions`] records each row's first and last boundary cell
+/// as it marks them (larger blocks scan their rows for them).
+const SPAN_ROWS: usize = 64;
+
+/// Widen row `row`'s span of boundary cells ([`SPAN_ROWS`]) to columns `lo..=hi`.
+#[inline(always)]
+fn widen(spans: &mut [(usize, usize); SPAN_ROWS], row: usize, lo: usize, hi: usize) {
+    if let Some(s) = spans.get_mut(row) {
+        *s = (s.0.min(lo), s.1.max(hi));
+    }
+}
+
+/// The edge pieces ½ P × Q of up to [`LINE_LANES`] consecutive cells along a lattice line, over lanes: the
+/// pieces run from `from` through the vertices `vertex(0)`, `vertex(1)`, … (the lattice lines across), the
+/// piece of lane `left` (the last cell before the line's second crossing) ending at `end` instead. Returns the
+/// pieces (lanes past `left` unspecified) and where the last lane's piece ends.
+#[inline(always)]
+fn edge_pieces<T: Real>(
+    from: [T; 2],
+    end: [T; 2],
+    left: usize,
+    vertex: impl Fn(usize) -> [T; 2],
+) -> ([T; LINE_LANES], [T; 2]) {
+    let half = T::lit(0.5);
+    let (mut u, mut v) = ([T::zero(); LINE_LANES], [T::zero(); LINE_LANES]);
+    for l in 0..LINE_LANES {
+        let q = vertex(l);
+        (u[l], v[l]) = if l == left {
+            (end[0], end[1])
+        } else {
+            (q[0], q[1])
+        };
+    }
+    let mut pieces = [T::zero(); LINE_LANES];
+    for l in 0..LINE_LANES {
+        let start = if l == 0 { from } else { [u[l - 1], v[l - 1]] };
+        pieces[l] = half * cross(start, [u[l], v[l]]);
+    }
+    let last = left.min(LINE_LANES - 1);
+    (pieces, [u[last], v[last]])
+}
+
 /// ⌊v⌋ and the distance from v to the nearest integer, without a library call or a branch (so that it
 /// vectorises): v rounded to an integer by adding and subtracting 1/ε (ε the machine epsilon; the sum's ulp
 /// is 1), less one where that rounded up. Bitwise `v.floor()` for |v| < 1/(2ε) except at v = −0 (which gives
@@ -488,6 +530,8 @@ pub fn ellipse_grid_fractions<T: Real>(
     };
     fr.fill(T::zero());
     bd.fill(false);
+    // First and last boundary cell of each row (empty: first > last), for blocks of up to SPAN_ROWS rows.
+    let mut spans = [(usize::MAX, 0usize); SPAN_ROWS];
     let (w, h) = (grid.w, grid.h);
     let half = T::lit(0.5);
     // Lattice lines: x = xl + i (i = 0..=w), y = yl + j (j = 0..=h).
@@ -569,18 +613,23 @@ pub fn ellipse_grid_fractions<T: Real>(
             for k in [left_lo, right_lo, left_hi, right_hi] {
                 bd[k] = true;
             }
-            // Upward pieces: the right edge of the left cell (+), the left edge of the right cell (−).
+            widen(&mut spans, row_lo, i - 1, i);
+            widen(&mut spans, row_hi, i - 1, i);
+            // Upward pieces: the right edge of the left cell (+), the left edge of the right cell (−); the piece
+            // of row j ends at the vertex (x, row j's top line), or at the upper crossing in row `row_hi`.
             let mut from = p_lo;
-            for j in row_lo..=row_hi {
-                let to = if j == row_hi {
-                    p_hi
-                } else {
-                    map(x, yl + T::lit((j + 1) as f64))
-                };
-                let piece = half * cross(from, to);
-                fr[j * w + i - 1] += piece;
-                fr[j * w + i] -= piece;
-                from = to;
+            let mut j = row_lo;
+            while j <= row_hi {
+                let pieces = edge_pieces(from, p_hi, row_hi - j, |l| {
+                    map(x, yl + T::lit((j + l + 1) as f64))
+                });
+                let m = (row_hi + 1 - j).min(LINE_LANES);
+                for (l, &piece) in pieces.0.iter().enumerate().take(m) {
+                    fr[(j + l) * w + i - 1] += piece;
+                    fr[(j + l) * w + i] -= piece;
+                }
+                from = pieces.1;
+                j += m;
             }
         }
         i0 += LINE_LANES;
@@ -623,24 +672,29 @@ pub fn ellipse_grid_fractions<T: Real>(
             for k in [above_lo, below_lo, above_hi, below_hi] {
                 bd[k] = true;
             }
+            widen(&mut spans, j, col_lo, col_hi);
+            widen(&mut spans, j - 1, col_lo, col_hi);
             // Rightward pieces: the bottom edge of the cell above (+), the top edge of the cell below (−).
             let mut from = p_lo;
-            for k in col_lo..=col_hi {
-                let to = if k == col_hi {
-                    p_hi
-                } else {
-                    map(xl + T::lit((k + 1) as f64), y)
-                };
-                let piece = half * cross(from, to);
-                fr[j * w + k] += piece;
-                fr[(j - 1) * w + k] -= piece;
-                from = to;
+            let mut k = col_lo;
+            while k <= col_hi {
+                let pieces = edge_pieces(from, p_hi, col_hi - k, |l| {
+                    map(xl + T::lit((k + l + 1) as f64), y)
+                });
+                let m = (col_hi + 1 - k).min(LINE_LANES);
+                for (l, &piece) in pieces.0.iter().enumerate().take(m) {
+                    fr[j * w + k + l] += piece;
+                    fr[(j - 1) * w + k + l] -= piece;
+                }
+                from = pieces.1;
+                k += m;
             }
         }
         j0 += LINE_LANES;
     }
     fr[cut_cell] += T::PI();
     bd[cut_cell] = true;
+    widen(&mut spans, cut_cell / w, cut_cell % w, cut_cell % w);
     let ab = a * b;
     for j in 0..h {
         // Only the cells from the row's first boundary cell to its last can be covered: a cell no crossing
@@ -648,15 +702,24 @@ pub fn ellipse_grid_fractions<T: Real>(
         // are not crossed either); the run at either end of a row reaches the block's outermost lattice lines,
         // which lie outside the bounding circle, so it is outside (fraction 0, as filled above). A row without
         // boundary cells is outside altogether.
+        // (Where the block has at most SPAN_ROWS rows the span was recorded as the cells were marked.)
         let row = &bd[j * w..(j + 1) * w];
-        let (Some(first), Some(last)) = (row.iter().position(|&m| m), row.iter().rposition(|&m| m))
-        else {
+        let span = if h <= SPAN_ROWS {
+            let (first, last) = spans[j];
+            (first <= last).then_some((first, last))
+        } else {
+            row.iter()
+                .position(|&m| m)
+                .zip(row.iter().rposition(|&m| m))
+        };
+        let Some((first, last)) = span else {
             continue;
         };
-        for k in first..=last {
-            let e = j * w + k;
-            fr[e] = if bd[e] {
-                (fr[e] * ab).max(T::zero()).min(T::one())
+        // A boundary cell's sum times ab, clamped; any other cell 1 or 0 as its node is inside or not (LINE_LANES
+        // cells at a time where the row has them, so that the loop vectorises).
+        let cell = |k: usize, f: T, boundary: bool| {
+            if boundary {
+                (f * ab).max(T::zero()).min(T::one())
             } else {
                 let p = map(xl + T::lit(k as f64) + half, yl + T::lit(j as f64) + half);
                 if dot(p, p) < T::one() {
@@ -664,7 +727,24 @@ pub fn ellipse_grid_fractions<T: Real>(
                 } else {
                     T::zero()
                 }
+            }
+        };
+        let (fr_row, bd_row) = (&mut fr[j * w..(j + 1) * w], &bd[j * w..(j + 1) * w]);
+        let mut k = first;
+        while k + LINE_LANES <= last + 1 {
+            let (Ok(f), Ok(m)) = (
+                <&mut [T; LINE_LANES]>::try_from(&mut fr_row[k..k + LINE_LANES]),
+                <&[bool; LINE_LANES]>::try_from(&bd_row[k..k + LINE_LANES]),
+            ) else {
+                break;
             };
+            for l in 0..LINE_LANES {
+                f[l] = cell(k + l, f[l], m[l]);
+            }
+            k += LINE_LANES;
+        }
+        for k in k..=last {
+            fr_row[k] = cell(k, fr_row[k], bd_row[k]);
         }
     }
     true

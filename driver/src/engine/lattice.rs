@@ -645,9 +645,7 @@ impl BodyCells {
         ) {
             return false;
         }
-        // The lattice's part of the block (the same bounds, clamped), without the nodes on Zou–He sides. In each
-        // row only the cells from its first boundary cell to its last can have a positive fraction (the kernel
-        // leaves the others at 0, see `ellipse_grid_fractions`), so only those are visited.
+        // The lattice's part of the block (the same bounds, clamped), without the nodes on Zou–He sides.
         let (gx, gy) = (
             (x0 as i64 - grid.x0) as usize,
             (y0 as i64 - grid.y0) as usize,
@@ -674,28 +672,22 @@ impl BodyCells {
         for y in ya..=yb {
             self.row_starts.push(self.fractions.len() as u32);
             let row = (y - y0 + gy) * grid.w;
-            // The row's boundary cells in the whole block row (its covered cells lie from the first to the last,
-            // also where the lattice cuts the block), then the lattice part's columns of the block.
-            let marks = &self.grid_boundary[row..row + grid.w];
-            let (Some(first), Some(last)) = (
-                marks.iter().position(|&m| m),
-                marks.iter().rposition(|&m| m),
-            ) else {
-                continue;
-            };
-            let (ka, kb) = ((xa - x0 + gx).max(first), (xb - x0 + gx).min(last));
-            if ka > kb {
-                continue;
-            }
+            // The lattice part's columns of the block row: every cell, each kept when its fraction is positive
+            // (the kernel leaves the cells outside a row's span of boundary cells at exactly 0), written without
+            // a branch and the list cut back to the kept ones.
+            let (ka, kb) = (xa - x0 + gx, xb - x0 + gx);
             // Node of block column k: the row's node of column ka, plus k − ka.
-            let node_ka = s.index(ka + x0 - gx, y) as u32;
+            let node_ka = s.index(xa, y) as u32;
             let fr = &self.grid_fractions[row + ka..=row + kb];
-            self.fractions.reserve(fr.len());
+            let start = self.fractions.len();
+            self.fractions.resize(start + fr.len(), (0, 0.0));
+            let out = &mut self.fractions[start..];
+            let mut kept = 0;
             for (k, &frac) in fr.iter().enumerate() {
-                if frac > 0.0 {
-                    self.fractions.push((node_ka + k as u32, frac));
-                }
+                out[kept] = (node_ka + k as u32, frac);
+                kept += usize::from(frac > 0.0);
             }
+            self.fractions.truncate(start + kept);
         }
         true
     }
