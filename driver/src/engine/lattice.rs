@@ -81,6 +81,8 @@ pub struct FluidLattice<T: Real> {
 #[derive(Default)]
 struct CoverScratch {
     bodies: Vec<BodyCells>,
+    /// One kernel scratch per chunk of [`BODY_CHUNK`] bodies.
+    grids: Vec<GridScratch>,
     /// The bodies meeting each band of rows (increasing), and each band's plan.
     band_bodies: Vec<Vec<u32>>,
     plans: Vec<BandPlan>,
@@ -98,6 +100,20 @@ struct CoverScratch {
     /// ΩΛ's open links of every node, kept up to date between calls.
     links: LinkState,
 }
+
+/// Scratch of the whole-ellipse kernel (`ellipse_grid_fractions`): fractions and boundary marks of one body's
+/// unclamped cell block. One per chunk of [`BODY_CHUNK`] bodies, reused body after body, so that the block
+/// the kernel fills and the driver copies from stays in the core's cache (one buffer per body, as before,
+/// spread 3.8 MB of zero-filling over memory at every call in the full-size fracture test).
+#[derive(Default)]
+struct GridScratch {
+    fractions: Vec<f64>,
+    boundary: Vec<bool>,
+}
+
+/// Bodies per task of the per-body pass of [`FluidLattice::cover_with_bodies`] (each task with its own
+/// [`GridScratch`]).
+const BODY_CHUNK: usize = 16;
 
 /// One band's slices of the coverage arrays, written by [`BandPlan::write`].
 struct BandOut<'a, T> {
@@ -449,10 +465,6 @@ struct BodyCells {
     /// (the last entry is `fractions.len()`), so the cells of rows ya..yb are `fractions[row_starts[ya − y0] ..
     /// row_starts[yb − y0]]` without a search.
     row_starts: Vec<u32>,
-    /// Scratch of the whole-ellipse kernel (`ellipse_grid_fractions`): fractions and boundary marks of the
-    /// body's unclamped cell block.
-    grid_fractions: Vec<f64>,
-    grid_boundary: Vec<bool>,
 }
 
 impl BodyCells {
@@ -484,6 +496,7 @@ impl BodyCells {
         s: &LatticeShape,
         bc: &Boundaries<T>,
         simd: SimdLevel,
+        grid: &mut GridScratch,
     ) {
         let key = Self::geometry_key(body);
         self.recomputed = self.key != Some(key);
@@ -492,7 +505,7 @@ impl BodyCells {
             std::mem::swap(&mut self.fractions, &mut self.prev);
             std::mem::swap(&mut self.row_starts, &mut self.prev_row_starts);
             self.prev_y0 = self.range.map(|r| r[2]);
-            self.recompute(body, s, bc, simd);
+            self.recompute(body, s, bc, simd, grid);
         }
     }
 
@@ -542,9 +555,10 @@ impl BodyCells {
         s: &LatticeShape,
         bc: &Boundaries<T>,
         simd: SimdLevel,
+        grid: &mut GridScratch,
     ) {
         self.row_starts.clear();
-        self.recompute_cells(body, s, bc, simd);
+        self.recompute_cells(body, s, bc, simd, grid);
         // Where each row's cells start: recorded row by row as the cells were pushed, completed here for rows
         // after the last one pushed (none when no row was).
         if let Some([_, _, y0, y1]) = self.range {
@@ -560,13 +574,14 @@ impl BodyCells {
         s: &LatticeShape,
         bc: &Boundaries<T>,
         simd: SimdLevel,
+        grid: &mut GridScratch,
     ) {
         self.fractions.clear();
         self.range = body_cell_range(body, s.nx, s.ny);
         let Some([x0, x1, y0, y1]) = self.range else {
             return;
         };
-        if self.recompute_ellipse(body, s, bc, simd) {
+        if self.recompute_ellipse(body, s, bc, simd, grid) {
             return;
         }
         let prepared = PreparedBody::new(body);
@@ -624,6 +639,7 @@ impl BodyCells {
         s: &LatticeShape,
         bc: &Boundaries<T>,
         simd: SimdLevel,
+        scratch: &mut GridScratch,
     ) -> bool {
         let Some([x0, x1, y0, y1]) = self.range else {
             return false;
@@ -632,12 +648,12 @@ impl BodyCells {
         else {
             return false;
         };
-        self.grid_fractions.resize(n, 0.0);
-        self.grid_boundary.resize(n, false);
+        scratch.fractions.resize(n, 0.0);
+        scratch.boundary.resize(n, false);
         // Compiled for the lattice's SIMD level: the kernel computes the crossings of eight lattice lines at a
         // time over lanes (same bits at every level).
         let sin_cos = angle.portable_sin_cos();
-        let (fr, bd) = (&mut self.grid_fractions, &mut self.grid_boundary);
+        let (fr, bd) = (&mut scratch.fractions, &mut scratch.boundary);
         if !with_simd(
             simd,
             #[inline(always)]
@@ -678,7 +694,7 @@ impl BodyCells {
             let (ka, kb) = (xa - x0 + gx, xb - x0 + gx);
             // Node of block column k: the row's node of column ka, plus k − ka.
             let node_ka = s.index(xa, y) as u32;
-            let fr = &self.grid_fractions[row + ka..=row + kb];
+            let fr = &scratch.fractions[row + ka..=row + kb];
             let start = self.fractions.len();
             self.fractions.resize(start + fr.len(), (0, 0.0));
             let out = &mut self.fractions[start..];
@@ -1202,10 +1218,18 @@ impl<T: Real> FluidLattice<T> {
         let scratch = &mut self.cover_scratch;
         scratch.bodies.resize_with(bodies.len(), BodyCells::default);
         scratch
+            .grids
+            .resize_with(bodies.len().div_ceil(BODY_CHUNK), GridScratch::default);
+        scratch
             .bodies
-            .par_iter_mut()
-            .zip(bodies.par_iter())
-            .for_each(|(cells, body)| cells.update(body, &s, &bc, simd));
+            .par_chunks_mut(BODY_CHUNK)
+            .zip(bodies.par_chunks(BODY_CHUNK))
+            .zip(scratch.grids.par_iter_mut())
+            .for_each(|((cells, bodies), grid)| {
+                for (cells, body) in cells.iter_mut().zip(bodies) {
+                    cells.update(body, &s, &bc, simd, grid);
+                }
+            });
         // 2.–4. The coverage's lists: rewritten in place when every body covers the same nodes as at the last
         //    call and that call built them, otherwise built anew.
         let lambda = self.solid_operator == SolidOperator::LambdaConsistent;
@@ -1658,11 +1682,17 @@ impl<T: Real> FluidLattice<T> {
         let mut forces = vec![Vector::zeros(); centers.len()];
         let mut torques = vec![0.0; centers.len()];
         if let Some(c) = &self.coverage {
-            let exchange: Vec<[f64; 2]> = c
-                .exchange
-                .iter()
-                .map(|e| [e[0].to_f64_exact(), e[1].to_f64_exact()])
-                .collect();
+            // An f64 lattice's exchange as it is; an f32 one's widened (exactly) into a copy.
+            let exchange: Cow<'_, [[f64; 2]]> =
+                match (&c.exchange as &dyn std::any::Any).downcast_ref::<Vec<[f64; 2]>>() {
+                    Some(e) => Cow::Borrowed(e),
+                    None => Cow::Owned(
+                        c.exchange
+                            .iter()
+                            .map(|e| [e[0].to_f64_exact(), e[1].to_f64_exact()])
+                            .collect(),
+                    ),
+                };
             let periodic = self.bc.periodic_axes();
             let periods = [
                 periodic[0].then_some(self.shape.nx as f64),
