@@ -111,6 +111,15 @@ struct GridScratch {
     boundary: Vec<bool>,
 }
 
+/// What the per-body pass of [`FluidLattice::cover_with_bodies`] needs besides the body: the lattice's shape and
+/// sides, the kernel's SIMD level and the task's kernel scratch.
+struct CellPass<'a, T> {
+    shape: &'a LatticeShape,
+    bc: &'a Boundaries<T>,
+    simd: SimdLevel,
+    grid: &'a mut GridScratch,
+}
+
 /// Bodies per task of the per-body pass of [`FluidLattice::cover_with_bodies`] (each task with its own
 /// [`GridScratch`]).
 const BODY_CHUNK: usize = 16;
@@ -490,14 +499,7 @@ impl BodyCells {
 
     /// Recompute the cells unless the geometry is bitwise unchanged (nodes on Zou–He sides are skipped), keeping
     /// the previous ones for [`BodyCells::kept_its_nodes`].
-    fn update<T: Real>(
-        &mut self,
-        body: &CoupledBody<f64>,
-        s: &LatticeShape,
-        bc: &Boundaries<T>,
-        simd: SimdLevel,
-        grid: &mut GridScratch,
-    ) {
+    fn update<T: Real>(&mut self, body: &CoupledBody<f64>, pass: &mut CellPass<'_, T>) {
         let key = Self::geometry_key(body);
         self.recomputed = self.key != Some(key);
         if self.recomputed {
@@ -505,7 +507,7 @@ impl BodyCells {
             std::mem::swap(&mut self.fractions, &mut self.prev);
             std::mem::swap(&mut self.row_starts, &mut self.prev_row_starts);
             self.prev_y0 = self.range.map(|r| r[2]);
-            self.recompute(body, s, bc, simd, grid);
+            self.recompute(body, pass);
         }
     }
 
@@ -549,16 +551,9 @@ impl BodyCells {
                 .all(|(a, b)| a.0 == b.0)
     }
 
-    fn recompute<T: Real>(
-        &mut self,
-        body: &CoupledBody<f64>,
-        s: &LatticeShape,
-        bc: &Boundaries<T>,
-        simd: SimdLevel,
-        grid: &mut GridScratch,
-    ) {
+    fn recompute<T: Real>(&mut self, body: &CoupledBody<f64>, pass: &mut CellPass<'_, T>) {
         self.row_starts.clear();
-        self.recompute_cells(body, s, bc, simd, grid);
+        self.recompute_cells(body, pass);
         // Where each row's cells start: recorded row by row as the cells were pushed, completed here for rows
         // after the last one pushed (none when no row was).
         if let Some([_, _, y0, y1]) = self.range {
@@ -568,20 +563,14 @@ impl BodyCells {
     }
 
     /// The cells and their fractions (see [`BodyCells::recompute`]).
-    fn recompute_cells<T: Real>(
-        &mut self,
-        body: &CoupledBody<f64>,
-        s: &LatticeShape,
-        bc: &Boundaries<T>,
-        simd: SimdLevel,
-        grid: &mut GridScratch,
-    ) {
+    fn recompute_cells<T: Real>(&mut self, body: &CoupledBody<f64>, pass: &mut CellPass<'_, T>) {
         self.fractions.clear();
+        let (s, bc) = (pass.shape, pass.bc);
         self.range = body_cell_range(body, s.nx, s.ny);
         let Some([x0, x1, y0, y1]) = self.range else {
             return;
         };
-        if self.recompute_ellipse(body, s, bc, simd, grid) {
+        if self.recompute_ellipse(body, pass) {
             return;
         }
         let prepared = PreparedBody::new(body);
@@ -636,11 +625,10 @@ impl BodyCells {
     fn recompute_ellipse<T: Real>(
         &mut self,
         body: &CoupledBody<f64>,
-        s: &LatticeShape,
-        bc: &Boundaries<T>,
-        simd: SimdLevel,
-        scratch: &mut GridScratch,
+        pass: &mut CellPass<'_, T>,
     ) -> bool {
+        let (s, bc, simd) = (pass.shape, pass.bc, pass.simd);
+        let scratch = &mut *pass.grid;
         let Some([x0, x1, y0, y1]) = self.range else {
             return false;
         };
@@ -1226,8 +1214,14 @@ impl<T: Real> FluidLattice<T> {
             .zip(bodies.par_chunks(BODY_CHUNK))
             .zip(scratch.grids.par_iter_mut())
             .for_each(|((cells, bodies), grid)| {
+                let mut pass = CellPass {
+                    shape: &s,
+                    bc: &bc,
+                    simd,
+                    grid,
+                };
                 for (cells, body) in cells.iter_mut().zip(bodies) {
-                    cells.update(body, &s, &bc, simd, grid);
+                    cells.update(body, &mut pass);
                 }
             });
         // 2.–4. The coverage's lists: rewritten in place when every body covers the same nodes as at the last
