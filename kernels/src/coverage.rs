@@ -318,9 +318,7 @@ fn interval_and_gap<T: Real>(t: T, o: T, n: usize) -> (usize, T) {
     let f = floor_exact(v);
     let frac = v - f;
     let gap = frac.min(T::one() - frac);
-    let i = f.to_f64_exact();
-    let i = if i > 0.0 { (i as usize).min(n - 1) } else { 0 };
-    (i, gap)
+    (interval(f, n), gap)
 }
 
 /// Lattice lines whose crossings [`ellipse_grid_fractions`] computes together, over lanes (the compiler
