@@ -711,6 +711,14 @@ pub fn prepare_packed(scene: &FractureScene, packing: Packing<f64>) -> Result<Fr
         ..
     } = packing;
     world.local_damping = scene.solid.local_damping;
+    if !converged {
+        eprintln!(
+            "lbdem: WARNING: the packing did not reach packing.isotropic_stress in equilibrium within {steps} DEM \
+             steps (wall stresses {:.3e} / {:.3e} / {:.3e} / {:.3e}): the sample starts off its stated stress; \
+             change packing.seed, or raise solid.normal_stiffness or packing.isotropic_stress",
+            wall_stresses[0], wall_stresses[1], wall_stresses[2], wall_stresses[3]
+        );
+    }
     let packed = json!({
         "particles": world.particles.len(),
         "bonds": world.bonds.len(),

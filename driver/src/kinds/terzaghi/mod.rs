@@ -47,6 +47,10 @@ const DRY_BLOCK: u64 = 500;
 const DRY_TOLERANCE: f64 = 1e-3;
 /// Step limit of each dry equilibrium.
 const DRY_MAX_STEPS: u64 = 400_000;
+/// Largest dry strain of the step load taken as an elastic strain of the skeleton (the bundled scene's is
+/// 3.6e-3, the table-6.3 storage models' 1e-4); beyond it the pack rearranges (a loose pack collapsed by 43 %
+/// under the bundled load with K_v then 120× too soft).
+const MAX_DRY_STRAIN: f64 = 0.05;
 /// Diffusion time over sound-crossing time below which the run warns that the column is not
 /// diffusion-dominated.
 pub const DIFFUSION_DOMINATED: f64 = 20.0;
@@ -335,6 +339,26 @@ fn start(case: &Case<Terzaghi>, exec: &Exec) -> Result<TerzaghiState> {
         _ => None,
     };
     let pk = generate_packing(&spec, bonds)?;
+    if !pk.converged {
+        // A pack short of the isotropic stress, or not in equilibrium, collapses under the step: the drained
+        // modulus, and everything predicted from it, would describe a rearrangement.
+        return Err(LbdemError::field(
+            "terzaghi.isotropic_stress",
+            c.isotropic_stress,
+            &format!(
+                "the random pack did not reach it in equilibrium within {} DEM steps (wall stresses {:.3e} / \
+                 {:.3e} / {:.3e} / {:.3e}, unbalanced force ratio {:.1e})",
+                pk.steps,
+                pk.wall_stresses[0],
+                pk.wall_stresses[1],
+                pk.wall_stresses[2],
+                pk.wall_stresses[3],
+                pk.unbalanced_force_ratio
+            ),
+            "change terzaghi.seed, or pack a shorter column (terzaghi.height) or larger grains (terzaghi.radius_min, \
+             radius_max)",
+        ));
+    }
     let mut dem = pk.world;
     // Bonds stiffen the grains' springs: the step follows the bonded world's critical step.
     let critical = critical.min(dem.critical_time_step());
@@ -377,6 +401,26 @@ fn start(case: &Case<Terzaghi>, exec: &Exec) -> Result<TerzaghiState> {
     );
     let after_forces = dry.external_force.clone();
     let dry_strain = step.settlement / thickness;
+    if !(step.converged && dry_strain > 0.0 && dry_strain <= MAX_DRY_STRAIN) {
+        return Err(LbdemError::field(
+            "terzaghi.load",
+            c.load,
+            &format!(
+                "the dry step load {} (strain {dry_strain:.3e} after {} DEM steps): not a small elastic strain of the \
+                 skeleton, so no drained modulus can be measured",
+                if step.converged {
+                    "rearranged the pack"
+                } else {
+                    "did not settle"
+                },
+                step.steps
+            ),
+            &format!(
+                "keep the dry strain within {MAX_DRY_STRAIN}: lower terzaghi.load, or raise terzaghi.isotropic_stress \
+                 or terzaghi.normal_stiffness"
+            ),
+        ));
+    }
     let drained_modulus = constrained_modulus(c.load, dry_strain);
     // 4. The coupled lattice: walls W/E/S on the platens, Zou–He P = 0 at the top of a free layer.
     let nx = (c.width / h).round() as usize;
