@@ -297,6 +297,39 @@ proptest! {
         }
     }
 
+    /// The reduction is bitwise the direct sum in share order (each body's additions one after the other, as
+    /// `direct_sums` writes them), whether the shares of different bodies interleave share by share or come
+    /// in runs of one body (the coverage's lists: a body's cells along a row), including runs of bodies out of
+    /// range between them.
+    #[test]
+    fn reduction_is_bitwise_the_sum_in_share_order(
+        centers in prop::collection::vec([0.0f64..40.0, 0.0f64..40.0], 1..5),
+        s in shares(4),
+        runs in prop::collection::vec(1usize..9, 0..60),
+        periodic in [any::<bool>(), any::<bool>()],
+    ) {
+        let periods = [periodic[0].then_some(40.0), periodic[1].then_some(40.0)];
+        // The same shares with each one's owner repeated over the next `runs[i]` shares: runs of one body.
+        let mut in_runs = s.clone();
+        let mut k = 0;
+        for (i, &r) in runs.iter().enumerate() {
+            let owner = s.get(i).map_or(0, |x| x.1);
+            for x in in_runs.iter_mut().skip(k).take(r) {
+                x.1 = owner;
+            }
+            k += r;
+        }
+        for shares in [&s, &in_runs] {
+            let (f, t) = kernel_reduce(shares, &centers, periods);
+            let (wf, wt, _) = direct_sums(shares, &centers, periods);
+            for p in 0..centers.len() {
+                prop_assert_eq!(f[p][0].to_bits(), wf[p][0].to_bits(), "body {} force x", p);
+                prop_assert_eq!(f[p][1].to_bits(), wf[p][1].to_bits(), "body {} force y", p);
+                prop_assert_eq!(t[p].to_bits(), wt[p].to_bits(), "body {} torque", p);
+            }
+        }
+    }
+
     /// Translating every node and centre by whole cells (wrapped on periodic axes) leaves forces and torques
     /// unchanged to roundoff; a quarter turn (x, y) → (−y, x) of nodes, centres and exchanges turns each force
     /// the same way and keeps each torque, bitwise (the turn only permutes and negates).
