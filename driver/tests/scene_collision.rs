@@ -307,3 +307,72 @@ fn free_grain_kinds_default_to_trt_and_lambda_consistent_where_stable_and_fall_b
     assert_eq!(fs.solid_operator, SolidOperator::LambdaConsistent);
     assert_eq!(fs.collision_default, lbdem::units::CollisionName::Trt);
 }
+
+/// ΩΛ with a **pack** of free grains has its own stability map (`LAMBDA_PACKED_GRAIN_STABILITY`): in the
+/// bundled Terzaghi column (free rock discs in contact) TRT + ΩΛ was stable at τ = 1.1 and diverged at 1.25 and
+/// 1.4, where a lone rock disc is stable to τ = 2. So for the kinds that make a pack, ΩΛ named is refused from
+/// τ = 1.25 and warned above 1.1, and the default falls back to Ω₁ₗ + BGK above 1.1 with a warning; a lone
+/// grain keeps its map.
+#[test]
+fn lambda_consistent_with_packed_grains_follows_the_pack_map() {
+    use lbdem::kinds::consolidation::{self, Consolidation};
+    use lbdem::kinds::terzaghi::Terzaghi;
+    let warned = |w: &[String]| {
+        w.iter()
+            .any(|w| w.contains("outside the region measured stable"))
+    };
+    // τ = 0.5 + 3ν in these scenes (h = 0.02 cm, Δt = 4e-4 s).
+    let tz = adding(
+        &scene("terzaghi.toml"),
+        "record_interval = 0.25   # s",
+        "solid_operator = \"lambda_consistent\"",
+    );
+    let e = refused_by_both(&with(&tz, "viscosity", "0.25"), "terzaghi.solid_operator");
+    assert!(e.contains("pack") && e.contains("fluid.tau"), "{e}");
+    let warnings = |text: &str| {
+        Case::<Terzaghi>::read(text, "t.toml")
+            .unwrap()
+            .setup
+            .warnings
+    };
+    assert!(warned(&warnings(&with(&tz, "viscosity", "0.24"))));
+    assert!(!warned(&warnings(&with(&tz, "viscosity", "0.19"))));
+    // Consolidation names no operator: TRT + ΩΛ at τ = 0.8 (the bundled scene), Ω₁ₗ + BGK with a warning at
+    // τ = 1.22, where a lone rock grain would still get ΩΛ.
+    let choice = |text: &str| {
+        let case = Case::<Consolidation>::read(text, "c.toml").unwrap();
+        let mut w = lbdem::units::Warnings::default();
+        let c = consolidation::fluid_choice(&case.scene, case.setup.units.tau, &mut w);
+        (c, w.0)
+    };
+    let cs = scene("consolidation.toml");
+    assert_eq!(
+        choice(&cs).0,
+        (
+            lbdem::units::CollisionName::Trt,
+            SolidOperator::LambdaConsistent
+        )
+    );
+    let (c, w) = choice(&with(&cs, "viscosity", "0.24"));
+    assert_eq!(
+        c,
+        (
+            lbdem::units::CollisionName::Bgk,
+            SolidOperator::LinearizedNonEquilibriumBounceBack
+        )
+    );
+    assert!(
+        w.iter()
+            .any(|w| w.contains("solid_operator not given") && w.contains("packed")),
+        "{w:?}"
+    );
+    // A lone rock grain at the same τ: ΩΛ, no warning (the free-disc map).
+    let tv = with(&scene("terminal_velocity.toml"), "tau", "1.22");
+    let case =
+        Case::<lbdem::kinds::terminal_velocity::TerminalVelocity>::read(&tv, "t.toml").unwrap();
+    assert!(case
+        .setup
+        .warnings
+        .iter()
+        .all(|w| !w.contains("solid_operator not given")));
+}

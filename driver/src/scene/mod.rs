@@ -341,12 +341,12 @@ impl UnitsSetup {
     }
 
     /// [`UnitsSetup::new`] for a kind with free grains: the kind's `choose` (default collision and solid
-    /// operator at τ) checked by [`check_free_grain_fluid`] against the grains' `density_ratio`, its warnings
+    /// operator at τ) checked by [`check_free_grain_fluid`] against the scene's `grains`, its warnings
     /// kept; `field` names the scene's solid-operator key.
     pub fn with_free_grains(
         fluid: &FluidSection,
         field: &str,
-        density_ratio: f64,
+        grains: FreeGrains,
         choose: impl FnOnce(
             f64,
             &mut crate::units::Warnings,
@@ -359,7 +359,7 @@ impl UnitsSetup {
         let mut w = crate::units::Warnings(std::mem::take(&mut s.warnings));
         let tau = s.units.tau;
         let choice = choose(tau, &mut w);
-        check_free_grain_fluid(field, fluid, choice, tau, density_ratio, &mut w)?;
+        check_free_grain_fluid(field, fluid, choice, tau, grains, &mut w)?;
         s.warnings = w.0;
         Ok(s)
     }
@@ -408,19 +408,86 @@ pub const LAMBDA_FREE_GRAIN_STABILITY: [(f64, f64, f64); 3] = [
     (2.0, 2.0, f64::INFINITY),
 ];
 
+/// As [`LAMBDA_FREE_GRAIN_STABILITY`] for grains **packed** against each other (the kinds that make a pack:
+/// `fracture`, `consolidation`, `terzaghi`). Measured with TRT + ΩΛ on `scenes/terzaghi.toml` (77 free rock
+/// discs of 3.2–4.8 fluid nodes in radius, ρs/ρf = 2.65, in contact; τ changed through the viscosity, 6 s after
+/// the step): stable at τ = 0.8, 0.95 and 1.1; diverged at τ = 1.25 (2 s after the step) and 1.4 (1 s after):
+/// one grain's velocity and spin, and the density of a fully covered node at its edge and of its partly covered
+/// neighbour (ε = 0.97), flip sign every step and grow, where a lone disc of the same density is stable to
+/// τ = 2. Rows for lighter grains take the lower of the two maps' limits (no pack of them was measured).
+pub const LAMBDA_PACKED_GRAIN_STABILITY: [(f64, f64, f64); 3] =
+    [(0.0, 0.55, 0.8), (1.25, 1.1, 1.25), (2.0, 1.1, 1.25)];
+
+/// The free grains of a scene, for the choice and the check of its solid operator: the lightest grain's
+/// density over the fluid's, and whether the grains are packed against each other (a pack) or lone (a few
+/// grains in fluid): ΩΛ's stability map differs ([`LAMBDA_FREE_GRAIN_STABILITY`],
+/// [`LAMBDA_PACKED_GRAIN_STABILITY`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FreeGrains {
+    /// Lightest grain density / fluid density.
+    pub density_ratio: f64,
+    /// Grains packed in contact (true) or lone in fluid (false).
+    pub packed: bool,
+}
+
+impl FreeGrains {
+    /// Lone grains in fluid (`terminal_velocity`, `coupled_demo`).
+    pub fn lone(density_ratio: f64) -> Self {
+        Self {
+            density_ratio,
+            packed: false,
+        }
+    }
+
+    /// A pack of grains in contact (`fracture`, `consolidation`, `terzaghi`).
+    pub fn packed(density_ratio: f64) -> Self {
+        Self {
+            density_ratio,
+            packed: true,
+        }
+    }
+
+    /// The row of ΩΛ's stability map for these grains: (lowest density ratio of the row, largest τ measured
+    /// stable, smallest τ measured to diverge).
+    fn lambda_row(&self) -> (f64, f64, f64) {
+        let map = if self.packed {
+            &LAMBDA_PACKED_GRAIN_STABILITY
+        } else {
+            &LAMBDA_FREE_GRAIN_STABILITY
+        };
+        map.iter()
+            .rev()
+            .find(|r| self.density_ratio >= r.0)
+            .copied()
+            .unwrap_or(map[0])
+    }
+
+    /// Where ΩΛ's limits for these grains were measured, for messages.
+    fn lambda_measured(&self) -> &'static str {
+        if self.packed {
+            "measured in a pack of free rock discs (README, moving solids: scenes/terzaghi.toml with TRT + \
+             Omega_Lambda): stable to tau = 1.1, diverged at 1.25 and 1.4; lighter packed grains take the lower \
+             limits of the pack and of a lone disc"
+        } else {
+            "measured with a free disc (README, moving solids): grain/fluid density 1 stable at tau = 0.55 and \
+             diverged from 0.8; 1.25-1.5 stable to 1.2 and diverged at 2; 2 and above stable to 2"
+        }
+    }
+}
+
 /// The fluid collision and solid operator of a scene with free grains that names neither, at relaxation time
-/// `tau`, for grains `density_ratio` times as dense as the fluid (the lightest grain).
+/// `tau`, for the scene's free `grains` (lone or packed; the lightest grain's density over the fluid's).
 ///
-/// The τ-independent combination, TRT + ΩΛ, where ΩΛ was measured stable with a free grain of that density
-/// ([`LAMBDA_FREE_GRAIN_STABILITY`]: τ at or below the row's last stable τ, grains at least as dense as the
-/// fluid): its drag does not move with τ (free disc +0.42…+0.45 % over τ = 0.55…2 where Ω₁ with BGK moves
+/// The τ-independent combination, TRT + ΩΛ, where ΩΛ was measured stable with such grains
+/// ([`LAMBDA_FREE_GRAIN_STABILITY`] for lone grains, [`LAMBDA_PACKED_GRAIN_STABILITY`] for packs: τ at or below
+/// the row's last stable τ, grains at least as dense as the fluid): its drag does not move with τ (free disc +0.42…+0.45 % over τ = 0.55…2 where Ω₁ with BGK moves
 /// from +0.49 to −10.4 %) and the fracture scenes' intact permeability is the same at every τ (README,
 /// "Results that do not depend on τ"). Elsewhere the best operator that is stable there, Ω₁ₗ with BGK (the
 /// dissertation's method; drag moves with τ), and `warnings` says so and what to change to get TRT + ΩΛ.
 /// A scene that names `solid_operator` or `collision` keeps its choice for that key.
 pub fn free_grain_defaults(
     tau: f64,
-    density_ratio: f64,
+    grains: FreeGrains,
     warnings: &mut crate::units::Warnings,
 ) -> (
     crate::units::CollisionName,
@@ -428,16 +495,18 @@ pub fn free_grain_defaults(
 ) {
     use crate::units::CollisionName;
     use lbdem_kernels::fluid::collide::SolidOperator as Op;
-    let stable = lambda_free_grain_row(density_ratio).1;
+    let density_ratio = grains.density_ratio;
+    let stable = grains.lambda_row().1;
     if density_ratio >= 1.0 && tau <= stable {
         (CollisionName::Trt, Op::LambdaConsistent)
     } else {
         warnings.push(format!(
             "solid_operator not given: the default, \"lambda_consistent\" with collision = \"trt\" (results \
-             independent of tau), is outside the region measured stable for free grains {density_ratio:.3} times \
-             as dense as the fluid at tau = {tau:.4}; using \"linearized_non_equilibrium_bounce_back\" \
+             independent of tau), is outside the region measured stable for {} free grains {density_ratio:.3} \
+             times as dense as the fluid at tau = {tau:.4}; using \"linearized_non_equilibrium_bounce_back\" \
              (Omega_1l) with collision = \"bgk\" instead, whose drag and permeability move with tau. For \
              results independent of tau lower fluid.tau to {stable} or below{}",
+            if grains.packed { "packed" } else { "lone" },
             if density_ratio < 1.0 {
                 " and use grains at least as dense as the fluid"
             } else {
@@ -455,7 +524,7 @@ pub fn free_grain_defaults(
 pub fn free_grain_choice(
     given: Option<lbdem_kernels::fluid::collide::SolidOperator>,
     tau: f64,
-    density_ratio: f64,
+    grains: FreeGrains,
     warnings: &mut crate::units::Warnings,
 ) -> (
     crate::units::CollisionName,
@@ -466,23 +535,13 @@ pub fn free_grain_choice(
     match given {
         Some(Op::LambdaConsistent) => (CollisionName::Trt, Op::LambdaConsistent),
         Some(op) => (CollisionName::Bgk, op),
-        None => free_grain_defaults(tau, density_ratio, warnings),
+        None => free_grain_defaults(tau, grains, warnings),
     }
-}
-
-/// The row of [`LAMBDA_FREE_GRAIN_STABILITY`] for grains `density_ratio` times as dense as the fluid.
-fn lambda_free_grain_row(density_ratio: f64) -> (f64, f64, f64) {
-    LAMBDA_FREE_GRAIN_STABILITY
-        .iter()
-        .rev()
-        .find(|r| density_ratio >= r.0)
-        .copied()
-        .unwrap_or(LAMBDA_FREE_GRAIN_STABILITY[0])
 }
 
 /// The fluid of a kind with free grains, checked in one place: the collision the scene asks for
 /// (`[fluid] collision`, else the kind's default `choice.0`) in both precisions at `tau`, and the solid operator
-/// `choice.1` against the grains' `density_ratio` ([`check_free_grain_operator`], `field` naming the scene's
+/// `choice.1` against the scene's `grains` ([`check_free_grain_operator`], `field` naming the scene's
 /// operator key). Kinds call it once, from their set-up.
 pub fn check_free_grain_fluid(
     field: &str,
@@ -492,32 +551,34 @@ pub fn check_free_grain_fluid(
         lbdem_kernels::fluid::collide::SolidOperator,
     ),
     tau: f64,
-    density_ratio: f64,
+    grains: FreeGrains,
     warnings: &mut crate::units::Warnings,
 ) -> Result<()> {
     fluid.checked_collision(choice.0, tau)?;
-    check_free_grain_operator(field, choice.1, tau, density_ratio, warnings)
+    check_free_grain_operator(field, choice.1, tau, grains, warnings)
 }
 
 /// Check the PSM solid operator `op` (read from `field`) of a scene whose grains move freely under the fluid's
-/// force, at relaxation time `tau`, for grains `density_ratio` times as dense as the fluid (the lightest grain).
+/// force, at relaxation time `tau`, for the scene's free `grains` (lone or packed; the lightest grain's density
+/// over the fluid's).
 ///
 /// Refused (the moving-solid table of issue 11, README "Moving solids, every operator"): Ω₃ (moving-wall
 /// bounce-back; at full cover it reverses the fluid's velocity relative to the grain and the coupled mode grows
 /// by 1 + 2 m_fluid/m_grain per step: divergence within ~100 steps), Ω₂ (superposition: fluid seeps through
 /// moving solids, effective surface 0.15–1.4 spacings off and a free disc's drag −3 % to −21 %), and ΩΛ with
-/// light grains at a τ where it was measured to diverge ([`LAMBDA_FREE_GRAIN_STABILITY`]; warned between the
-/// last τ measured stable and the first measured to diverge, and for grains lighter than the fluid). Ω₁ and
+/// a τ where it was measured to diverge with such grains ([`LAMBDA_FREE_GRAIN_STABILITY`] for lone grains,
+/// [`LAMBDA_PACKED_GRAIN_STABILITY`] for packs; warned between the last τ measured stable and the first
+/// measured to diverge, and for grains lighter than the fluid). Ω₁ and
 /// Ω₁ₗ pass (τ-dependent drag; see README).
 pub fn check_free_grain_operator(
     field: &str,
     op: lbdem_kernels::fluid::collide::SolidOperator,
     tau: f64,
-    density_ratio: f64,
+    grains: FreeGrains,
     warnings: &mut crate::units::Warnings,
 ) -> Result<()> {
     use lbdem_kernels::fluid::collide::SolidOperator as Op;
-    let fix = "use solid_operator = \"lambda_consistent\" (Omega_Lambda, the default: stable with free rock grains, \
+    let fix = "use solid_operator = \"lambda_consistent\" (Omega_Lambda, the default: stable with free rock grains (packed: to tau = 1.1), \
                drag independent of tau with collision = \"trt\"), or \"linearized_non_equilibrium_bounce_back\" \
                (Omega_1l)";
     match op {
@@ -537,10 +598,9 @@ pub fn check_free_grain_operator(
             fix,
         )),
         Op::LambdaConsistent => {
-            let (_, stable, diverged) = lambda_free_grain_row(density_ratio);
-            let measured = "measured with a free disc (README, moving solids): grain/fluid density 1 stable at \
-                            tau = 0.55 and diverged from 0.8; 1.25-1.5 stable to 1.2 and diverged at 2; 2 and \
-                            above stable to 2";
+            let (_, stable, diverged) = grains.lambda_row();
+            let density_ratio = grains.density_ratio;
+            let measured = grains.lambda_measured();
             if tau >= diverged {
                 return Err(LbdemError::field(
                     field,

@@ -20,7 +20,7 @@ use crate::output::snapshots::{chunk_with_snapshots, write_coupled_at_step, Snap
 use crate::output::{csv, write_atomic};
 use crate::run::{run_in_memory, Case, Kind, OutputStage, Persist, RunOptions};
 use crate::scene::{
-    free_grain_choice, CheckpointSection, SceneHeader, SnapshotSection, UnitsSetup,
+    free_grain_choice, CheckpointSection, FreeGrains, SceneHeader, SnapshotSection, UnitsSetup,
 };
 use crate::units::{collision_of, CollisionName, FluidSection, Warnings};
 
@@ -68,7 +68,7 @@ pub fn fluid_choice(
     free_grain_choice(
         c.solid_operator,
         tau,
-        c.grain_density / scene.fluid.density,
+        FreeGrains::packed(c.grain_density / scene.fluid.density),
         warnings,
     )
 }
@@ -424,7 +424,7 @@ impl Kind for Consolidation {
         UnitsSetup::with_free_grains(
             &scene.fluid,
             "consolidation.solid_operator",
-            scene.consolidation.grain_density / scene.fluid.density,
+            FreeGrains::packed(scene.consolidation.grain_density / scene.fluid.density),
             |tau, w| fluid_choice(scene, tau, w),
         )
     }

@@ -43,7 +43,7 @@ use crate::output::snapshots::{chunk_with_snapshots, write_coupled, SnapshotCloc
 use crate::output::vtk::{LatticeFrame, Stamp, Units};
 use crate::output::{csv, write_atomic};
 use crate::run::{Case, CheckpointInterval, Kind, OutputStage, Persist};
-use crate::scene::free_grain_defaults;
+use crate::scene::{free_grain_defaults, FreeGrains};
 use crate::scene::{CheckpointSection, SnapshotSection, UnitSystem};
 use crate::units::{CollisionName, UnitLabels, Warnings, TAU_REFUSE_HIGH};
 
@@ -119,7 +119,11 @@ impl DemoScene {
     /// TRT + ΩΛ, whose drag does not move with τ, at τ ≤ 2 (measured stable there with such grains), Ω₁ₗ with
     /// BGK above.
     pub fn fluid_choice(&self) -> (Collision<f64>, SolidOperator) {
-        let (name, op) = free_grain_defaults(self.demo.tau, DISC_DENSITY, &mut Warnings::default());
+        let (name, op) = free_grain_defaults(
+            self.demo.tau,
+            FreeGrains::lone(DISC_DENSITY),
+            &mut Warnings::default(),
+        );
         let collision = match name {
             CollisionName::Trt => Collision::Trt(Trt::default()),
             CollisionName::Bgk => Collision::Bgk,

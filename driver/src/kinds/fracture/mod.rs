@@ -56,7 +56,9 @@ use crate::scene::solid::{
     bond_spec, critical_time_step, packing_spec, validate_packing_and_solid, PackingSection,
     SolidSection,
 };
-use crate::scene::{check_free_grain_fluid, free_grain_choice, CheckpointSection, SceneHeader};
+use crate::scene::{
+    check_free_grain_fluid, free_grain_choice, CheckpointSection, FreeGrains, SceneHeader,
+};
 use crate::units::{
     check_density_drop, check_tau, collision_of, CollisionName, FluidSection, LatticeUnits,
     Warnings,
@@ -294,7 +296,7 @@ impl FractureScene {
         free_grain_choice(
             f.solid_operator,
             tau,
-            self.packing.density / f.density,
+            FreeGrains::packed(self.packing.density / f.density),
             warnings,
         )
     }
@@ -418,7 +420,7 @@ impl FractureScene {
             &f.section(),
             choice,
             units.tau,
-            self.packing.density / f.density,
+            FreeGrains::packed(self.packing.density / f.density),
             warnings,
         )?;
         let h = f.spacing;

@@ -40,7 +40,7 @@ use crate::output::vtk::{LatticeFrame, Scale, Stamp};
 use crate::output::{csv, write_atomic};
 use crate::run::{run_in_memory, Case, Kind, OutputStage, Persist, RunOptions};
 use crate::scene::{
-    free_grain_choice, CheckpointSection, SceneHeader, SnapshotSection, UnitsSetup,
+    free_grain_choice, CheckpointSection, FreeGrains, SceneHeader, SnapshotSection, UnitsSetup,
 };
 use crate::units::{collision_of, CollisionName, FluidSection, Warnings};
 
@@ -58,7 +58,7 @@ pub fn fluid_choice(
     free_grain_choice(
         t.solid_operator,
         tau,
-        t.grain_density / scene.fluid.density,
+        FreeGrains::lone(t.grain_density / scene.fluid.density),
         warnings,
     )
 }
@@ -507,7 +507,7 @@ impl Kind for TerminalVelocity {
         UnitsSetup::with_free_grains(
             &scene.fluid,
             "terminal_velocity.solid_operator",
-            scene.terminal_velocity.grain_density / scene.fluid.density,
+            FreeGrains::lone(scene.terminal_velocity.grain_density / scene.fluid.density),
             |tau, w| fluid_choice(scene, tau, w),
         )
     }

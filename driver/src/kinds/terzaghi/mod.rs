@@ -32,7 +32,7 @@ use crate::output::snapshots::{chunk_with_snapshots, write_coupled_at_step, Snap
 use crate::output::{csv, write_atomic};
 use crate::run::{run_in_memory, Case, Kind, OutputStage, Persist, RunOptions};
 use crate::scene::{
-    free_grain_choice, CheckpointSection, SceneHeader, SnapshotSection, UnitsSetup,
+    free_grain_choice, CheckpointSection, FreeGrains, SceneHeader, SnapshotSection, UnitsSetup,
 };
 use crate::units::{collision_of, CollisionName, FluidSection, Warnings, CS2};
 
@@ -76,7 +76,12 @@ pub fn fluid_choice(
             CollisionName::Bgk,
             SolidOperator::LinearizedNonEquilibriumBounceBack,
         ),
-        given => free_grain_choice(given, tau, c.grain_density / scene.fluid.density, warnings),
+        given => free_grain_choice(
+            given,
+            tau,
+            FreeGrains::packed(c.grain_density / scene.fluid.density),
+            warnings,
+        ),
     }
 }
 
@@ -1069,7 +1074,7 @@ impl Kind for Terzaghi {
         UnitsSetup::with_free_grains(
             &scene.fluid,
             "terzaghi.solid_operator",
-            scene.terzaghi.grain_density / scene.fluid.density,
+            FreeGrains::packed(scene.terzaghi.grain_density / scene.fluid.density),
             |tau, w| fluid_choice(scene, tau, w),
         )
     }
