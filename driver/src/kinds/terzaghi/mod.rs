@@ -58,6 +58,11 @@ pub const DIFFUSION_DOMINATED: f64 = 20.0;
 pub const STARTUP_CROSSINGS: f64 = 3.0;
 
 const HINT: &str = "lower terzaghi.load or raise fluid.tau";
+/// [`HINT`] when the grains are under ΩΛ, whose pack mode grows at high τ.
+const HINT_LAMBDA: &str =
+    "lower terzaghi.load, or lower fluid.tau (under solid_operator = \"lambda_consistent\" a pack \
+                           of free grains diverged from tau = 1.25), or use solid_operator = \
+                           \"linearized_non_equilibrium_bounce_back\"";
 
 /// The default fluid collision and the solid operator of a Terzaghi scene: without `terzaghi.solid_operator`,
 /// Ω₁ₗ with BGK (the operator its README tables were measured with). TRT + ΩΛ, the free-grain kinds' default,
@@ -1139,7 +1144,14 @@ impl Kind for Terzaghi {
     }
 
     fn health(_case: &Case<Self>, state: &TerzaghiState) -> Result<()> {
-        coupled_health(&state.world, HINT)
+        // Under ΩΛ a pack of free grains diverges at high τ (README, *A pack is less stable than a lone disc*):
+        // there raising τ is the wrong way.
+        let hint = if state.world.fluid.solid_operator() == SolidOperator::LambdaConsistent {
+            HINT_LAMBDA
+        } else {
+            HINT
+        };
+        coupled_health(&state.world, hint)
     }
 
     fn write_outputs(
