@@ -154,7 +154,8 @@ fn base_test_breaks_bonds_into_fractures_perpendicular_to_the_least_stress() {
     let o = &s["results"]["orientation"];
     eprintln!("base: {b} of {total} bonds broken; orientation {o}");
     // The pressure drop (2.4 × the bonds' tensile strength, as ch. 6.6 states) breaks a clear share of the
-    // bonds where the controls break none: measured 8.8 %; require 3 %.
+    // bonds where the controls break none: measured 8.1 % (38 of 467; 8.8 % on the packing before b898dc9);
+    // require 3 %.
     assert!(
         b as f64 >= 0.03 * total as f64,
         "only {b} of {total} bonds broke"
@@ -262,16 +263,18 @@ fn permeability_study_follows_the_dissertations_trends() {
     // 0.6–0.8 is within a factor 4 of table 6.3's. Why so loose: the sample is not the dissertation's (1560
     // randomly oriented grains per 7 × 3.5 cm against its ~1000, here a 2.4 × 1.2 cm cut of it) and the quick
     // lattice is twice as coarse (2–5 nodes across a grain's minor axis), so only the order of magnitude carries
-    // over. Measured with the default TRT + ΩΛ: 1.97e-4 / 7.39e-5 / 3.57e-5 / 4.07e-6 (BGK + Ω₁ₗ, the earlier
+    // over. Measured with the default TRT + ΩΛ: 1.93e-4 / 7.24e-5 / 3.47e-5 / 3.83e-6 (with ΩΛ's earlier
+    // full-cover gap of 1e-3 and κ = 1.27: 1.97e-4 / 7.39e-5 / 3.57e-5 / 4.07e-6; BGK + Ω₁ₗ, the earlier
     // default, at this τ = 0.537: 1.63e-4 / 5.24e-5 / 2.03e-5 / 2.26e-6). At fluid radius 0.95 the throats are
-    // far below one spacing and the quick lattice does not resolve them: TRT + ΩΛ gives 4.07e-6 here but
-    // 1.39e-6 at the dissertation's spacing h = 0.009 cm (same grains), so the factor-4 check of that point is
-    // the ignored `quick_permeability_at_fluid_radius_095_is_within_4x_of_table_6_3` (fails today: ×4.07).
+    // far below one spacing and the quick lattice does not resolve them: TRT + ΩΛ gives 3.83e-6 here (×3.83 of
+    // table 6.3, inside the factor 4 only since ΩΛ's full-cover gap is 0.05; ×4.07 before) against 1.39e-6
+    // at the dissertation's spacing h = 0.009 cm (same grains, earlier gap), so that point is the one nearest
+    // the bound; `quick_permeability_at_fluid_radius_095_is_within_4x_of_table_6_3` runs it alone.
     // Damage (ch. 6.8): "as the diffusivity decreases, fluid pressure within the pore spaces is higher for a
     // longer duration, providing more opportunity for fracture growth", and deformation becomes less localized.
     // Asserted: the least permeable model breaks at least 20 % more bonds than the most permeable one
-    // (measured 63 against 41), and in every model the broken bonds' crack planes lie within 30° of
-    // perpendicular to σ₃ (as in the base test; measured 0.7–8°).
+    // (measured 55 against 38; 63 against 33 with ΩΛ's earlier full-cover gap), and in every model the broken
+    // bonds' crack planes lie within 30° of perpendicular to σ₃ (as in the base test; measured 1.0–7.3°).
     let table = [1.2e-4, 7e-5, 2.39e-5, 1e-6];
     let mut k = Vec::new();
     let mut breaks = Vec::new();
@@ -332,11 +335,10 @@ fn permeability_study_follows_the_dissertations_trends() {
 }
 
 #[test]
-#[ignore = "fails today: the quick lattice (h = 0.018 cm) does not resolve the sub-spacing throats at fluid radius \
-            0.95; TRT + ΩΛ gives k = 4.07e-6 cm² there (×4.07 table 6.3), 1.39e-6 at h = 0.009 cm (README)"]
 fn quick_permeability_at_fluid_radius_095_is_within_4x_of_table_6_3() {
     // The factor-4 check of `permeability_study_follows_the_dissertations_trends` (reasons there) at the point
-    // the quick lattice does not resolve.
+    // the quick lattice resolves least (sub-spacing throats): measured 3.83e-6 cm², ×3.83 of table 6.3 (it failed
+    // at ×4.07 with ΩΛ's earlier full-cover gap of 1e-3; README).
     let (_, s) = run_scene(&quick("permeability_4"), "k095");
     let perm = s["results"]["permeability"]["permeability"]
         .as_f64()

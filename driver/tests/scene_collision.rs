@@ -216,20 +216,20 @@ fn lambda_consistent_with_light_free_grains_at_high_tau_is_refused_and_near_the_
         w.iter()
             .any(|w| w.contains("outside the region measured stable"))
     };
-    // Neutrally buoyant grains (measured: stable at τ = 0.55, diverged from 0.8): refused at 0.8 and 1.2,
-    // warned at 0.7, accepted silently at 0.55.
+    // Neutrally buoyant grains (measured: stable to τ = 0.8, diverged from 1.2): refused at 1.2 and 2,
+    // warned at 1.0, accepted silently at 0.8.
     let light = with(&tv, "grain_density", "1.0");
-    for tau in ["0.8", "1.2"] {
+    for tau in ["1.2", "2.0"] {
         let e = refused_by_both(
             &with(&light, "tau", tau),
             "terminal_velocity.solid_operator",
         );
         assert!(e.contains("fluid.tau"), "{e}");
     }
-    assert!(warned(&warnings(&with(&light, "tau", "0.7"))));
-    assert!(!warned(&warnings(&with(&light, "tau", "0.55"))));
-    // 1.4 × the fluid (measured for 1.25 and 1.5: stable to 1.2, diverged at 2): refused at 2, warned at 1.5,
-    // silent at 1.2.
+    assert!(warned(&warnings(&with(&light, "tau", "1.0"))));
+    assert!(!warned(&warnings(&with(&light, "tau", "0.8"))));
+    // 1.4 × the fluid (measured for 1.25: stable to 1.2, diverged at 2): refused at 2, warned at 1.5, silent
+    // at 1.2.
     let mid = with(&tv, "grain_density", "1.4");
     refused_by_both(
         &with(&mid, "tau", "2.0"),
@@ -268,9 +268,9 @@ fn free_grain_kinds_default_to_trt_and_lambda_consistent_where_stable_and_fall_b
         .warnings
         .iter()
         .all(|w| !w.contains("solid_operator not given")));
-    // A neutrally buoyant grain at τ = 0.8, where ΩΛ diverged: not refused (the scene did not ask for ΩΛ) but
+    // A neutrally buoyant grain at τ = 1.2, where ΩΛ diverged: not refused (the scene did not ask for ΩΛ) but
     // Ω₁ₗ with BGK, and a warning naming what to change.
-    let light = read(&with(&with(&tv, "grain_density", "1.0"), "tau", "0.8"));
+    let light = read(&with(&with(&tv, "grain_density", "1.0"), "tau", "1.2"));
     assert_eq!(
         choice(&light),
         (
@@ -283,14 +283,14 @@ fn free_grain_kinds_default_to_trt_and_lambda_consistent_where_stable_and_fall_b
             .setup
             .warnings
             .iter()
-            .any(|w| w.contains("solid_operator not given") && w.contains("fluid.tau to 0.55")),
+            .any(|w| w.contains("solid_operator not given") && w.contains("fluid.tau to 0.8")),
         "{:?}",
         light.setup.warnings
     );
     // Naming ΩΛ there is still refused (the stability map).
     refused_by_both(
         &adding(
-            &with(&with(&tv, "grain_density", "1.0"), "tau", "0.8"),
+            &with(&with(&tv, "grain_density", "1.0"), "tau", "1.2"),
             "duration = 0.605       # s = 5000 steps (12 e-folding times of the slowest viscous mode l^2/(4 pi^2 nu))",
             "solid_operator = \"lambda_consistent\"",
         ),
@@ -309,10 +309,11 @@ fn free_grain_kinds_default_to_trt_and_lambda_consistent_where_stable_and_fall_b
 }
 
 /// ΩΛ with a **pack** of free grains has its own stability map (`LAMBDA_PACKED_GRAIN_STABILITY`): in the
-/// bundled Terzaghi column (free rock discs in contact) TRT + ΩΛ was stable at τ = 1.1 and diverged at 1.25 and
-/// 1.4, where a lone rock disc is stable to τ = 2. So for the kinds that make a pack, ΩΛ named is refused from
-/// τ = 1.25 and warned above 1.1, and the default falls back to Ω₁ₗ + BGK above 1.1 with a warning; a lone
-/// grain keeps its map.
+/// Terzaghi column (free discs in contact) TRT + ΩΛ with grains twice as dense as the fluid was stable at
+/// τ = 1.6 and diverged at 2, where a lone disc of that density is stable to τ = 2; rock grains (2.65) were
+/// stable to 2 in the pack. So for the kinds that make a pack, ΩΛ named with such grains is refused from τ = 2
+/// and warned above 1.6, and the default falls back to Ω₁ₗ + BGK above 1.6 with a warning; a lone grain keeps
+/// its map, and a rock pack takes ΩΛ at every τ measured.
 #[test]
 fn lambda_consistent_with_packed_grains_follows_the_pack_map() {
     use lbdem::kinds::consolidation::{self, Consolidation};
@@ -327,7 +328,8 @@ fn lambda_consistent_with_packed_grains_follows_the_pack_map() {
         "record_interval = 0.25   # s",
         "solid_operator = \"lambda_consistent\"",
     );
-    let e = refused_by_both(&with(&tz, "viscosity", "0.25"), "terzaghi.solid_operator");
+    let tz2 = with(&tz, "grain_density", "2.0");
+    let e = refused_by_both(&with(&tz2, "viscosity", "0.5"), "terzaghi.solid_operator");
     assert!(e.contains("pack") && e.contains("fluid.tau"), "{e}");
     let warnings = |text: &str| {
         Case::<Terzaghi>::read(text, "t.toml")
@@ -335,10 +337,13 @@ fn lambda_consistent_with_packed_grains_follows_the_pack_map() {
             .setup
             .warnings
     };
-    assert!(warned(&warnings(&with(&tz, "viscosity", "0.24"))));
-    assert!(!warned(&warnings(&with(&tz, "viscosity", "0.19"))));
-    // Consolidation names no operator: TRT + ΩΛ at τ = 0.8 (the bundled scene), Ω₁ₗ + BGK with a warning at
-    // τ = 1.22, where a lone rock grain would still get ΩΛ.
+    assert!(warned(&warnings(&with(&tz2, "viscosity", "0.4"))));
+    assert!(!warned(&warnings(&with(&tz2, "viscosity", "0.35"))));
+    // Rock grains: ΩΛ at τ = 2 without a warning.
+    assert!(!warned(&warnings(&with(&tz, "viscosity", "0.5"))));
+    // Consolidation names no operator: TRT + ΩΛ at τ = 0.8 (the bundled scene) and, with rock grains, at
+    // τ = 2; with grains twice as dense as the fluid Ω₁ₗ + BGK with a warning at τ = 1.7, where a lone grain of
+    // that density would still get ΩΛ.
     let choice = |text: &str| {
         let case = Case::<Consolidation>::read(text, "c.toml").unwrap();
         let mut w = lbdem::units::Warnings::default();
@@ -346,14 +351,17 @@ fn lambda_consistent_with_packed_grains_follows_the_pack_map() {
         (c, w.0)
     };
     let cs = scene("consolidation.toml");
-    assert_eq!(
-        choice(&cs).0,
-        (
-            lbdem::units::CollisionName::Trt,
-            SolidOperator::LambdaConsistent
-        )
+    let lambda = (
+        lbdem::units::CollisionName::Trt,
+        SolidOperator::LambdaConsistent,
     );
-    let (c, w) = choice(&with(&cs, "viscosity", "0.24"));
+    assert_eq!(choice(&cs).0, lambda);
+    assert_eq!(choice(&with(&cs, "viscosity", "0.5")).0, lambda);
+    let (c, w) = choice(&with(
+        &with(&cs, "grain_density", "2.0"),
+        "viscosity",
+        "0.4",
+    ));
     assert_eq!(
         c,
         (
@@ -366,8 +374,12 @@ fn lambda_consistent_with_packed_grains_follows_the_pack_map() {
             .any(|w| w.contains("solid_operator not given") && w.contains("packed")),
         "{w:?}"
     );
-    // A lone rock grain at the same τ: ΩΛ, no warning (the free-disc map).
-    let tv = with(&scene("terminal_velocity.toml"), "tau", "1.22");
+    // A lone grain of that density at the same τ: ΩΛ, no warning (the free-disc map).
+    let tv = with(
+        &with(&scene("terminal_velocity.toml"), "grain_density", "2.0"),
+        "tau",
+        "1.7",
+    );
     let case =
         Case::<lbdem::kinds::terminal_velocity::TerminalVelocity>::read(&tv, "t.toml").unwrap();
     assert!(case

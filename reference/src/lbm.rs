@@ -353,12 +353,12 @@ pub fn psm_with_collision(
 }
 
 /// ΩΛ's friction constant κ (`lbdem_kernels::fluid::collide::LAMBDA_FRICTION`, restated).
-pub const LAMBDA_FRICTION: f64 = 1.27;
+pub const LAMBDA_FRICTION: f64 = 1.21;
 
 /// ΩΛ's full-cover threshold: a node whose fractions sum to at least 1 − this gap takes the fully covered rule
-/// (the operator's definition, fixed at 1e-3 where the partly covered rule was measured to destabilise a free
-/// grain: lbdem-kernels `fluid::collide::LAMBDA_FULL_GAP`, whose doc gives the measurements).
-pub const LAMBDA_FULL_GAP: f64 = 1e-3;
+/// (the operator's definition, fixed at 0.05 where the partly covered rule was measured to destabilise free
+/// grains and packs of them: lbdem-kernels `fluid::collide::LAMBDA_FULL_GAP`, whose doc gives the measurements).
+pub const LAMBDA_FULL_GAP: f64 = 0.05;
 
 /// The magic-parameter-consistent partially saturated collision ΩΛ of one node (see the kernels'
 /// `lambda_collide` for the derivation), written from its definition. `magic` = `None` is BGK (Λ⁻ = Λ⁺);

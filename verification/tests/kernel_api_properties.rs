@@ -287,7 +287,10 @@ proptest! {
 
     /// ΩΛ's full-cover test is ε ≥ 1 − LAMBDA_FULL_GAP, in both precisions.
     #[test]
-    fn lambda_full_cover_is_a_threshold_at_the_gap(eps in 0.99f64..1.01, far in 0.0f64..0.99) {
+    fn lambda_full_cover_is_a_threshold_at_the_gap(
+        eps in (1.0 - 2.0 * LAMBDA_FULL_GAP)..1.01f64,
+        far in 0.0f64..(1.0 - 1.5 * LAMBDA_FULL_GAP),
+    ) {
         prop_assert_eq!(lambda_fully_covered(eps), eps >= 1.0 - LAMBDA_FULL_GAP);
         prop_assert!(!lambda_fully_covered(far));
         prop_assert_eq!(lambda_fully_covered(eps as f32), eps as f32 >= 1.0f32 - LAMBDA_FULL_GAP as f32);

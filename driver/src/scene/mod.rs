@@ -396,27 +396,31 @@ pub(crate) fn whole_spacings(field: &str, length: f64, h: f64) -> Result<usize> 
 
 pub use crate::input::parse::{kind_field, parse_scene, peek_kind, read_scene_text, KindField};
 
-/// Where ΩΛ with a free grain was measured stable and where it diverged (κ = 1.27; the free disc of
-/// `scenes/terminal_velocity.toml`, radius 10 nodes, Re ≈ 0.1;
-/// `cargo run --release -p lbdem --example moving_table -- --stability 1.25,1.5,2,2.65` and `-- --light`):
+/// Where ΩΛ with a free grain was measured stable and where it diverged (κ = 1.21, full-cover gap 0.05; the
+/// free disc of `scenes/terminal_velocity.toml`, radius 10 nodes, Re ≈ 0.1;
+/// `cargo run --release -p lbdem --example moving_table -- --stability 1,1.25,1.5,2,2.65`):
 /// (lowest grain/fluid density ratio of the row, largest τ measured stable, smallest τ measured to diverge).
-/// ρs/ρf = 1: stable at τ = 0.55, diverged from 0.8; 1.25 and 1.5: stable to 1.2, diverged at 2; 2 and 2.65:
-/// stable to 2 (the largest τ measured).
-pub const LAMBDA_FREE_GRAIN_STABILITY: [(f64, f64, f64); 3] = [
-    (0.0, 0.55, 0.8),
-    (1.25, 1.2, 2.0),
-    (2.0, 2.0, f64::INFINITY),
-];
+/// ρs/ρf = 1: stable to τ = 0.8, diverged from 1.2; 1.25: stable to 1.2, diverged at 2; 1.5, 2 and 2.65:
+/// stable to 2 (the largest τ measured). (With the earlier full-cover gap of 1e-3: ρs/ρf = 1 diverged from
+/// 0.8 and 1.5 at 2.)
+pub const LAMBDA_FREE_GRAIN_STABILITY: [(f64, f64, f64); 3] =
+    [(0.0, 0.8, 1.2), (1.25, 1.2, 2.0), (1.5, 2.0, f64::INFINITY)];
 
 /// As [`LAMBDA_FREE_GRAIN_STABILITY`] for grains **packed** against each other (the kinds that make a pack:
-/// `fracture`, `consolidation`, `terzaghi`). Measured with TRT + ΩΛ on `scenes/terzaghi.toml` (77 free rock
-/// discs of 3.2–4.8 fluid nodes in radius, ρs/ρf = 2.65, in contact; τ changed through the viscosity, 6 s after
-/// the step): stable at τ = 0.8, 0.95 and 1.1; diverged at τ = 1.25 (2 s after the step) and 1.4 (1 s after):
-/// one grain's velocity and spin, and the density of a fully covered node at its edge and of its partly covered
-/// neighbour (ε = 0.97), flip sign every step and grow, where a lone disc of the same density is stable to
-/// τ = 2. Rows for lighter grains take the lower of the two maps' limits (no pack of them was measured).
-pub const LAMBDA_PACKED_GRAIN_STABILITY: [(f64, f64, f64); 3] =
-    [(0.0, 0.55, 0.8), (1.25, 1.1, 1.25), (2.0, 1.1, 1.25)];
+/// `fracture`, `consolidation`, `terzaghi`). Measured with TRT + ΩΛ on `scenes/terzaghi.toml` shortened to 5 s
+/// (77 free discs of 3.2–4.8 fluid nodes in radius in contact; τ changed through the viscosity; the grains'
+/// density changed; a run is stable when it reaches its end): ρs/ρf = 1 stable to τ = 0.6, diverged at 0.8;
+/// 1.25 stable to 0.8, diverged at 1; 1.5 stable to 1.2, diverged at 1.6; 2 stable to 1.6, diverged at 2;
+/// 2.65 (rock) stable at 0.8, 1.2, 1.4 and 2 (three seeds at 2), as was the quick fracture scene's bonded
+/// ellipse pack at τ = 2. A pack is less stable than a lone grain of the same density: with the earlier
+/// full-cover gap of 1e-3 a rock pack diverged from τ = 1.25 (`LAMBDA_FULL_GAP` gives the mode).
+pub const LAMBDA_PACKED_GRAIN_STABILITY: [(f64, f64, f64); 5] = [
+    (0.0, 0.6, 0.8),
+    (1.25, 0.8, 1.0),
+    (1.5, 1.2, 1.6),
+    (2.0, 1.6, 2.0),
+    (2.65, 2.0, f64::INFINITY),
+];
 
 /// The free grains of a scene, for the choice and the check of its solid operator: the lightest grain's
 /// density over the fluid's, and whether the grains are packed against each other (a pack) or lone (a few
@@ -450,7 +454,7 @@ impl FreeGrains {
     /// The row of ΩΛ's stability map for these grains: (lowest density ratio of the row, largest τ measured
     /// stable, smallest τ measured to diverge).
     fn lambda_row(&self) -> (f64, f64, f64) {
-        let map = if self.packed {
+        let map: &[(f64, f64, f64)] = if self.packed {
             &LAMBDA_PACKED_GRAIN_STABILITY
         } else {
             &LAMBDA_FREE_GRAIN_STABILITY
@@ -465,12 +469,12 @@ impl FreeGrains {
     /// Where ΩΛ's limits for these grains were measured, for messages.
     fn lambda_measured(&self) -> &'static str {
         if self.packed {
-            "measured in a pack of free rock discs (README, moving solids: scenes/terzaghi.toml with TRT + \
-             Omega_Lambda): stable to tau = 1.1, diverged at 1.25 and 1.4; lighter packed grains take the lower \
-             limits of the pack and of a lone disc"
+            "measured in packs of free discs (README, moving solids: scenes/terzaghi.toml with TRT + \
+             Omega_Lambda): grain/fluid density 1 stable to tau = 0.6, 1.25 to 0.8, 1.5 to 1.2, 2 to 1.6, \
+             2.65 (rock) to 2; diverged at 0.8, 1, 1.6 and 2 respectively"
         } else {
-            "measured with a free disc (README, moving solids): grain/fluid density 1 stable at tau = 0.55 and \
-             diverged from 0.8; 1.25-1.5 stable to 1.2 and diverged at 2; 2 and above stable to 2"
+            "measured with a free disc (README, moving solids): grain/fluid density 1 stable to tau = 0.8 and \
+             diverged from 1.2; 1.25 stable to 1.2 and diverged at 2; 1.5 and above stable to 2"
         }
     }
 }
@@ -578,7 +582,7 @@ pub fn check_free_grain_operator(
     warnings: &mut crate::units::Warnings,
 ) -> Result<()> {
     use lbdem_kernels::fluid::collide::SolidOperator as Op;
-    let fix = "use solid_operator = \"lambda_consistent\" (Omega_Lambda, the default: stable with free rock grains (packed: to tau = 1.1), \
+    let fix = "use solid_operator = \"lambda_consistent\" (Omega_Lambda, the default: stable with free rock grains to tau = 2, \
                drag independent of tau with collision = \"trt\"), or \"linearized_non_equilibrium_bounce_back\" \
                (Omega_1l)";
     match op {

@@ -91,6 +91,10 @@ pub struct ArrayRun {
     pub error: f64,
     /// Force the solid received over G l² (≈ 1 − c: the rest is the buoyancy of the mean gradient).
     pub solid_force_ratio: f64,
+    /// The body force the fluid receives over G l², Σ (1 − ε)/l² over the nodes, counted from the coverage
+    /// map, not from the run: ΩΛ's fully covered nodes (ε ≥ 1 − `LAMBDA_FULL_GAP`) take none. Meaningful for
+    /// B = ε, where the solid must receive exactly this in the steady state.
+    pub fluid_force_share: f64,
     /// Steps run.
     pub steps: u64,
     /// Whether the steady criterion was met.
@@ -194,11 +198,25 @@ pub fn square_array_at(
     );
     let (_, rho_f) = superficial(&lattice, &eps);
     let ll = (cell * cell) as f64;
+    let fluid_force_share = eps
+        .iter()
+        .map(|&e| {
+            let full = method.solid == SolidOperator::LambdaConsistent
+                && lbdem_kernels::fluid::collide::lambda_fully_covered(e);
+            if full {
+                0.0
+            } else {
+                1.0 - e
+            }
+        })
+        .sum::<f64>()
+        / ll;
     let drag = g * ll / (rho_f * nu * u_s);
     ArrayRun {
         drag,
         error: drag / fbar - 1.0,
         solid_force_ratio: lattice.solid_forces(1)[0][0] / (g * ll),
+        fluid_force_share,
         steps: lattice.steps(),
         steady,
     }

@@ -60,15 +60,16 @@ pub const STARTUP_CROSSINGS: f64 = 3.0;
 const HINT: &str = "lower terzaghi.load or raise fluid.tau";
 /// [`HINT`] when the grains are under ΩΛ, whose pack mode grows at high τ.
 const HINT_LAMBDA: &str =
-    "lower terzaghi.load, or lower fluid.tau (under solid_operator = \"lambda_consistent\" a pack \
-                           of free grains diverged from tau = 1.25), or use solid_operator = \
-                           \"linearized_non_equilibrium_bounce_back\"";
+    "lower terzaghi.load, or lower fluid.tau (under solid_operator = \"lambda_consistent\" packs \
+                           of free grains diverged at high tau, the sooner the lighter the grains), or use \
+                           solid_operator = \"linearized_non_equilibrium_bounce_back\"";
 
 /// The default fluid collision and the solid operator of a Terzaghi scene: without `terzaghi.solid_operator`,
 /// Ω₁ₗ with BGK (the operator its README tables were measured with). TRT + ΩΛ, the free-grain kinds' default,
-/// was tried on the bundled scene (issue 11) and diverged inside the pack 2.4 s after the step (density 4.1 at
-/// step 6000; rock grains, τ = 0.8, where a single free disc is stable), so it is selectable here
-/// (`solid_operator = "lambda_consistent"`, then TRT), not the default. A given operator goes through
+/// was tried on the bundled scene (issue 11): it first diverged inside the pack (rock grains, τ = 0.8, where
+/// a single free disc was stable; cured by ΩΛ's full-cover gap, `LAMBDA_FULL_GAP`), and where it runs its
+/// Terzaghi comparison lies further from theory than Ω₁ₗ's (README, *Poroelastic validation*), so it is
+/// selectable here (`solid_operator = "lambda_consistent"`, then TRT), not the default. A given operator goes through
 /// [`free_grain_choice`] (ΩΛ with TRT, the others with BGK); `[fluid] collision` overrides the collision.
 pub fn fluid_choice(
     scene: &TerzaghiScene,
