@@ -264,9 +264,10 @@ pub const LAMBDA_FRICTION: f64 = 1.21;
 ///
 /// 0.05 is about three times the smallest gap measured stable in a pack at τ = 2 and five times the largest
 /// measured unstable there. What it costs: nodes covered to 95–99.9 % bounce their open links back instead of
-/// passing 1–5 % of a node's fluid through friction, so a boundary moves by at most 0.05 spacing there; the
-/// `terzaghi` column's permeability fell by 2.2 % (6.378e-5 → 6.237e-5 cm², the same at τ = 0.8, 1.4 and 2)
-/// and the square arrays' drag moved by tenths of a percent (README, "ΩΛ's friction constant κ").
+/// passing 0.1–5 % of a node's fluid through friction, so a boundary moves by at most 0.05 spacing there; with
+/// κ refitted (1.27 → 1.21, [`LAMBDA_FRICTION`]) the `terzaghi` column's permeability fell by 1.7 % (6.378e-5
+/// → 6.269e-5 cm², the same at τ = 0.8, 1.4 and 2 to 3e-4) and the square arrays' drag moved by tenths of a
+/// percent (README, "ΩΛ's friction constant κ").
 pub const LAMBDA_FULL_GAP: f64 = 0.05;
 
 /// Whether ΩΛ treats a node whose fractions sum to `eps_sum` as fully covered: ε ≥ 1 − [`LAMBDA_FULL_GAP`].
