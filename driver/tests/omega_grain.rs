@@ -70,8 +70,8 @@ fn steps_to_divergence(world: &mut CoupledWorld, steps: u64) -> Option<u64> {
 
 /// A free rock grain (ρs/ρf = 2.65, τ = 0.8) placed so that one node of its cover is left 4.2e-5 (centre y =
 /// 20.535) or 2.2e-5 (20.53) short of full cover, given 1e-5 of velocity in a periodic box: fluid and grain
-/// must share that momentum and come to rest together. Before ΩΛ treated a node with ε ≥ 1 − 1e-3 as fully
-/// covered (`LAMBDA_FULL_GAP`), such a node's partly-covered collision (local TRT rates
+/// must share that momentum and come to rest together. Before ΩΛ treated nodes this close to full cover as
+/// fully covered (`LAMBDA_FULL_GAP`: 1e-3 first, 0.05 since packs needed it), such a node's partly-covered collision (local TRT rates
 /// ω⁻ → 2 and ω⁺ → 0 as 1 − ε → 0, the node's fluid tied to the grain only by the bounded friction
 /// β = κΛ⁺B) fed a period-2 oscillation of the grain (its velocity flipping sign every step) that grew
 /// until the density left [0.9, 1.1] at step 5513 (resp. 4651): the grain 48 of the `terzaghi` column,
