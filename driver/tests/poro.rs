@@ -44,8 +44,8 @@ fn free_disc_conserves_momentum_exactly_and_reaches_the_sangani_acrivos_slip() {
     assert!(o.slip_drift.abs() < 1e-3, "slip drift {}", o.slip_drift);
     // Stokes regime (Re_D ~ 0.1: inertial corrections O(Re²) < 0.1 %).
     assert!(o.reynolds < 0.2, "Re {}", o.reynolds);
-    // F/(μU) against S&A 51.53 at c = 0.2: the fixed-disc PSM drag at l = 40 is +0.35 % with the default TRT + ΩΛ
-    // (README, τ table); measured +0.45 % here (with Ω₁ and BGK, the earlier default: −1.2 % here, −0.25 % at
+    // F/(μU) against S&A 51.53 at c = 0.2: the fixed-disc PSM drag at l = 40 is +0.65 % with the default TRT + ΩΛ
+    // (README, τ table); measured +0.44 % here (with Ω₁ and BGK, the earlier default: −1.2 % here, −0.25 % at
     // l = 80, scenes/terminal_velocity_full.toml). 3 % allows the coverage of
     // the moving disc to fluctuate and still fails on a missing (1 − c) buoyancy factor (20 %) or a
     // superficial/interstitial mix-up (25 %).

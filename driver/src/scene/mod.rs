@@ -484,7 +484,7 @@ impl FreeGrains {
 ///
 /// The τ-independent combination, TRT + ΩΛ, where ΩΛ was measured stable with such grains
 /// ([`LAMBDA_FREE_GRAIN_STABILITY`] for lone grains, [`LAMBDA_PACKED_GRAIN_STABILITY`] for packs: τ at or below
-/// the row's last stable τ, grains at least as dense as the fluid): its drag does not move with τ (free disc +0.42…+0.45 % over τ = 0.55…2 where Ω₁ with BGK moves
+/// the row's last stable τ, grains at least as dense as the fluid): its drag does not move with τ (free disc +0.42…+0.44 % over τ = 0.55…2 where Ω₁ with BGK moves
 /// from +0.49 to −10.4 %) and the fracture scenes' intact permeability is the same at every τ (README,
 /// "Results that do not depend on τ"). Elsewhere the best operator that is stable there, Ω₁ₗ with BGK (the
 /// dissertation's method; drag moves with τ), and `warnings` says so and what to change to get TRT + ΩΛ.
