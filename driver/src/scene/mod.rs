@@ -466,16 +466,37 @@ impl FreeGrains {
             .unwrap_or(map[0])
     }
 
-    /// Where ΩΛ's limits for these grains were measured, for messages.
-    fn lambda_measured(&self) -> &'static str {
-        if self.packed {
-            "measured in packs of free discs (README, moving solids: scenes/terzaghi.toml with TRT + \
-             Omega_Lambda): grain/fluid density 1 stable to tau = 0.6, 1.25 to 0.8, 1.5 to 1.2, 2 to 1.6, \
-             2.65 (rock) to 2; diverged at 0.8, 1, 1.6 and 2 respectively"
+    /// Where ΩΛ's limits for these grains were measured, for messages: the rows of the map in use, written
+    /// from the table itself (so the message cannot drift from what is enforced).
+    fn lambda_measured(&self) -> String {
+        let (map, what): (&[(f64, f64, f64)], &str) = if self.packed {
+            (
+                &LAMBDA_PACKED_GRAIN_STABILITY,
+                "measured in packs of free discs (README, *A pack is less stable than a lone disc*: \
+                 scenes/terzaghi.toml with TRT + Omega_Lambda)",
+            )
         } else {
-            "measured with a free disc (README, moving solids): grain/fluid density 1 stable to tau = 0.8 and \
-             diverged from 1.2; 1.25 stable to 1.2 and diverged at 2; 1.5 and above stable to 2"
-        }
+            (
+                &LAMBDA_FREE_GRAIN_STABILITY,
+                "measured with a free disc (README, moving solids)",
+            )
+        };
+        let rows: Vec<String> = map
+            .iter()
+            .map(|&(density, stable, diverged)| {
+                let from = if density > 0.0 {
+                    format!("grain/fluid density from {density}")
+                } else {
+                    "lighter grains".to_string()
+                };
+                if diverged.is_finite() {
+                    format!("{from} stable to tau = {stable}, diverged at {diverged}")
+                } else {
+                    format!("{from} stable to tau = {stable} (the largest measured)")
+                }
+            })
+            .collect();
+        format!("{what}: {}", rows.join("; "))
     }
 }
 
