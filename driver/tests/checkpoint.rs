@@ -234,6 +234,22 @@ fn coupled_world_resumes_bitwise() {
     assert_resumes_bitwise(a, |w| w.step(), 60);
 }
 
+/// With a remap tolerance the grains keep their mapped cells between re-mappings: a checkpoint taken between two
+/// re-mappings keeps the mapped geometry, and the resumed world maps the same cells.
+#[test]
+fn coupled_world_with_a_remap_tolerance_resumes_bitwise() {
+    let scene: DemoScene = Case::<CoupledDemo>::read(&demo_scene(100, "0"), "demo")
+        .unwrap()
+        .scene;
+    let mut a: CoupledWorld = scene.build_world().unwrap();
+    a.fluid.set_remap_tolerance(0.05).unwrap();
+    for _ in 0..61 {
+        a.step();
+    }
+    assert!(a.fluid.covered_nodes() > 0);
+    assert_resumes_bitwise(a, |w| w.step(), 60);
+}
+
 fn files(dir: &Path) -> Vec<(String, Vec<u8>)> {
     let mut v: Vec<(String, Vec<u8>)> = std::fs::read_dir(dir)
         .unwrap()

@@ -58,6 +58,9 @@ pub struct FluidLattice<T: Real> {
     steps: u64,
     coverage: Option<Coverage<T>>,
     cover_scratch: CoverScratch,
+    /// How far (lattice spacings) any point of a body may move before [`FluidLattice::cover_with_bodies`]
+    /// re-maps the bodies' cells (0: at every call). See [`FluidLattice::set_remap_tolerance`].
+    remap_tolerance: f64,
     solid_operator: SolidOperator,
     /// The fluid collision (BGK unless [`FluidLattice::set_collision`] chose TRT).
     collision: Collision<T>,
@@ -461,6 +464,10 @@ impl LinkState {
 #[derive(Default)]
 struct BodyCells {
     key: Option<[u64; 6]>,
+    /// The geometry (centre and shape; the velocities are not used) the cells were last mapped for, kept for
+    /// the remap tolerance ([`FluidLattice::set_remap_tolerance`]); set by every call, also when the cells
+    /// were kept.
+    anchor: Option<CoupledBody<f64>>,
     range: Option<[usize; 4]>,
     fractions: Vec<(u32, f64)>,
     /// The previous call's `fractions` and `row_starts` (their buffers are reused for the next ones).
@@ -594,6 +601,60 @@ impl BodyCells {
             }
         }
     }
+}
+
+/// The largest remap tolerance [`FluidLattice::set_remap_tolerance`] takes, in lattice spacings: a quarter of a
+/// cell, beyond which the lag would be a visible part of the partially covered cells it is meant to leave
+/// alone.
+pub const MAX_REMAP_TOLERANCE: f64 = 0.25;
+
+/// Refuses a remap tolerance ([`FluidLattice::set_remap_tolerance`]) that is negative, not finite or above
+/// [`MAX_REMAP_TOLERANCE`], naming `fluid.remap_tolerance`.
+pub fn check_remap_tolerance(tolerance: f64) -> Result<()> {
+    if tolerance.is_finite() && (0.0..=MAX_REMAP_TOLERANCE).contains(&tolerance) {
+        return Ok(());
+    }
+    Err(LbdemError::field(
+        "fluid.remap_tolerance",
+        tolerance,
+        &format!(
+            "must lie in [0, {MAX_REMAP_TOLERANCE}] lattice spacings: how far a grain may move before it is \
+             mapped onto the lattice again"
+        ),
+        "use 0 (re-map at every step, the default) or a few hundredths, e.g. 0.05",
+    ))
+}
+
+/// Whether no point of body `b` lies farther than `tolerance` (lattice spacings) from where it lay as body `a`:
+/// the same kind of shape with bitwise the same size, and |Δc| + r |Δθ| ≤ tolerance, with r the largest
+/// distance of a point of the shape from its centre (a point at distance r moves by at most r |Δθ| under a
+/// rotation by Δθ). False for anything not finite.
+fn moved_at_most(a: &CoupledBody<f64>, b: &CoupledBody<f64>, tolerance: f64) -> bool {
+    let turn = match (a.shape, b.shape) {
+        (BodyShape::Disc { radius: ra }, BodyShape::Disc { radius: rb })
+            if ra.to_bits() == rb.to_bits() =>
+        {
+            0.0
+        }
+        (
+            BodyShape::Ellipse {
+                semi_major: a1,
+                semi_minor: b1,
+                angle: t1,
+            },
+            BodyShape::Ellipse {
+                semi_major: a2,
+                semi_minor: b2,
+                angle: t2,
+            },
+        ) if a1.to_bits() == a2.to_bits() && b1.to_bits() == b2.to_bits() => {
+            a1.abs().max(b1.abs()) * (t2 - t1).abs()
+        }
+        _ => return false,
+    };
+    let d = b.center - a.center;
+    let shift = d[0].hypot(d[1]) + turn;
+    shift.is_finite() && shift <= tolerance
 }
 
 /// The unclamped cell block of an ellipse body, its cell count and the ellipse's (a, b, θ), when the
@@ -933,6 +994,7 @@ impl<T: Real> FluidLattice<T> {
             steps: 0,
             coverage: None,
             cover_scratch: CoverScratch::default(),
+            remap_tolerance: 0.0,
             solid_operator: SolidOperator::default(),
             collision: Collision::Bgk,
             profiles: [Side::West, Side::East, Side::South, Side::North].map(|side| {
@@ -1203,7 +1265,18 @@ impl<T: Real> FluidLattice<T> {
         //    per-cell exact formula on the cells near their boundary. A body whose geometry is bitwise unchanged
         //    since the last call keeps its cell fractions. The rigid velocities are evaluated in step 4.
         let simd = self.simd;
+        let tolerance = self.remap_tolerance;
         let scratch = &mut self.cover_scratch;
+        // With a remap tolerance, every body keeps the cells it was last mapped with while no point of any
+        // body has moved farther than the tolerance from where it was then (one decision for all bodies, so
+        // that between re-mappings no body changes its nodes and the lists are only rewritten).
+        let lag = tolerance > 0.0
+            && scratch.bodies.len() == bodies.len()
+            && scratch
+                .bodies
+                .par_iter()
+                .zip(bodies.par_iter())
+                .all(|(c, b)| c.anchor.is_some_and(|a| moved_at_most(&a, b, tolerance)));
         scratch.bodies.resize_with(bodies.len(), BodyCells::default);
         scratch
             .grids
@@ -1221,7 +1294,12 @@ impl<T: Real> FluidLattice<T> {
                     grid,
                 };
                 for (cells, body) in cells.iter_mut().zip(bodies) {
-                    cells.update(body, &mut pass);
+                    let mapped = match cells.anchor {
+                        Some(a) if lag => a,
+                        _ => *body,
+                    };
+                    cells.anchor = Some(mapped);
+                    cells.update(&mapped, &mut pass);
                 }
             });
         // 2.–4. The coverage's lists: rewritten in place when every body covers the same nodes as at the last
@@ -1236,9 +1314,20 @@ impl<T: Real> FluidLattice<T> {
                 .as_ref()
                 .is_some_and(|c| c.shares.len() == scratch.src.len())
             && scratch.bodies.iter().all(BodyCells::kept_its_nodes);
+        // No body recomputed its cells: the fractions, and so ΩΛ's fully covered nodes and open links, are
+        // those of the last call.
+        let kept = same_layout && scratch.bodies.iter().all(|c| !c.recomputed);
+        let links_kept = lambda && kept && scratch.links.valid;
         let mut cov = match self.coverage.take() {
             Some(mut cov) if same_layout => {
-                Self::update_shares_in_place(scratch, &mut cov, bodies, lambda, &mut full_now);
+                Self::update_shares_in_place(
+                    scratch,
+                    &mut cov,
+                    bodies,
+                    kept,
+                    lambda && !links_kept,
+                    &mut full_now,
+                );
                 cov.weighting = weighting;
                 cov
             }
@@ -1255,7 +1344,10 @@ impl<T: Real> FluidLattice<T> {
         let total = cov.shares.len();
         cov.exchange.clear();
         cov.exchange.resize(total, [T::zero(); 2]);
-        if lambda {
+        if links_kept {
+            // The masks of the last call (`cov.links`) stand; the spare list goes back.
+            scratch.links.spare = full_now;
+        } else if lambda {
             // Only the neighbours of nodes whose full cover changed since the last call get new masks.
             let mut links = std::mem::take(&mut cov.links);
             scratch
@@ -1417,23 +1509,62 @@ impl<T: Real> FluidLattice<T> {
     /// The shares of a coverage whose lists the last call built, when every body covers the same nodes as then
     /// (the common case: grains move a thousandth of a spacing per step, and a body's set of cells changes only
     /// when its outline crosses a lattice vertex): each share's fraction and rigid velocity rewritten in place,
-    /// from the cell it was built from, in parallel over chunks of shares; ΩΛ's fully covered nodes appended to
-    /// `full_now` (`lambda`). The lists themselves (nodes, offsets, owners, share nodes) are what
-    /// [`FluidLattice::build_shares`] would build from the same cells, so the result is bitwise the same.
+    /// from the cell it was built from, in parallel over chunks of shares (only the velocity where no body
+    /// recomputed its cells since the last call, `fractions_kept`: between re-mappings under a remap
+    /// tolerance, or with bodies at rest); ΩΛ's fully covered nodes appended to `full_now` (`lambda`). The lists
+    /// themselves (nodes, offsets, owners, share nodes) are what [`FluidLattice::build_shares`] would build from
+    /// the same cells, so the result is bitwise the same.
     fn update_shares_in_place(
         scratch: &mut CoverScratch,
         cov: &mut Coverage<T>,
         bodies: &[CoupledBody<f64>],
+        fractions_kept: bool,
         lambda: bool,
         full_now: &mut Vec<u32>,
     ) {
         const CHUNK: usize = 4096;
         let cells = &scratch.bodies;
+        if fractions_kept {
+            // No body recomputed its cells since the last call wrote these shares: only the rigid velocities
+            // change (each body's fractions, read back from its list, would be the same values).
+            cov.shares
+                .par_chunks_mut(CHUNK)
+                .zip(cov.owners.par_chunks(CHUNK))
+                .zip(cov.share_nodes.par_chunks(CHUNK))
+                .for_each(|((shares, owners), nodes)| {
+                    for ((share, &owner), &p) in shares.iter_mut().zip(owners).zip(nodes) {
+                        let v = rigid_velocity(&bodies[owner as usize], Vector::from(p));
+                        share.velocity = [T::lit(v[0]), T::lit(v[1])];
+                    }
+                });
+        } else {
+            Self::rewrite_shares(cov, cells, &scratch.src, bodies);
+        }
+        if lambda {
+            let cov = &*cov;
+            full_now.par_extend(
+                (0..cov.nodes.len())
+                    .into_par_iter()
+                    .filter(|&k| node_is_full(cov, k))
+                    .map(|k| cov.nodes[k]),
+            );
+        }
+        scratch.in_place += 1;
+    }
+
+    /// Each share's fraction (from the cell it was built from) and rigid velocity rewritten in place.
+    fn rewrite_shares(
+        cov: &mut Coverage<T>,
+        cells: &[BodyCells],
+        src: &[u32],
+        bodies: &[CoupledBody<f64>],
+    ) {
+        const CHUNK: usize = 4096;
         cov.shares
             .par_chunks_mut(CHUNK)
             .zip(cov.owners.par_chunks(CHUNK))
             .zip(cov.share_nodes.par_chunks(CHUNK))
-            .zip(scratch.src.par_chunks(CHUNK))
+            .zip(src.par_chunks(CHUNK))
             .for_each(|(((shares, owners), nodes), src)| {
                 for (((share, &owner), &p), &i) in shares.iter_mut().zip(owners).zip(nodes).zip(src)
                 {
@@ -1445,16 +1576,6 @@ impl<T: Real> FluidLattice<T> {
                     };
                 }
             });
-        if lambda {
-            let cov = &*cov;
-            full_now.par_extend(
-                (0..cov.nodes.len())
-                    .into_par_iter()
-                    .filter(|&k| node_is_full(cov, k))
-                    .map(|k| cov.nodes[k]),
-            );
-        }
-        scratch.in_place += 1;
     }
 
     /// Cover the lattice with one solid (body 0) given cell by cell: the fraction `fraction(x, y)` of each cell it
@@ -1593,8 +1714,61 @@ impl<T: Real> FluidLattice<T> {
         }
     }
 
+    /// Let [`FluidLattice::cover_with_bodies`] keep every body's cells (nodes and fractions) while no point of
+    /// any body has moved farther than `tolerance` lattice spacings from where it was when they were last mapped,
+    /// and re-map all bodies at the call where one has; the rigid velocities at the covered nodes follow the
+    /// bodies at every call, and the momentum handed to them stays exact. So the solid the fluid sees lags the
+    /// bodies by at most `tolerance` (an approximation, bounded; the default 0 re-maps at every call, bitwise the
+    /// result without this option). Between re-mappings no body changes its nodes, so a call only rewrites the
+    /// rigid velocities: grains that vibrate by a thousandth of a spacing per step no longer rebuild the
+    /// coverage's lists at every step (README, *Benchmarks*, for the speed and the error measured in the
+    /// fracture test). Refuses a tolerance that is negative, not finite or above [`MAX_REMAP_TOLERANCE`].
+    pub fn set_remap_tolerance(&mut self, tolerance: f64) -> Result<()> {
+        check_remap_tolerance(tolerance)?;
+        self.remap_tolerance = tolerance;
+        Ok(())
+    }
+
+    /// See [`FluidLattice::set_remap_tolerance`] (lattice spacings; 0 by default).
+    pub fn remap_tolerance(&self) -> f64 {
+        self.remap_tolerance
+    }
+
+    /// The geometry each body's cells were last mapped for (lattice units; velocities zero), when a remap
+    /// tolerance is set: what a checkpoint keeps so that a resumed run maps the same cells.
+    fn mapped_geometry(&self) -> Vec<CoupledBody<f64>> {
+        if self.remap_tolerance == 0.0 {
+            return Vec::new();
+        }
+        let zero = lbdem_kernels::math::Vector::zeros();
+        self.cover_scratch
+            .bodies
+            .iter()
+            .map_while(|c| c.anchor)
+            .map(|a| CoupledBody {
+                velocity: zero,
+                spin: 0.0,
+                ..a
+            })
+            .collect()
+    }
+
+    /// Restore [`FluidLattice::mapped_geometry`] from a checkpoint: the next call of
+    /// [`FluidLattice::cover_with_bodies`] maps these geometries where the bodies are still within the tolerance
+    /// of them, as the saved run would have.
+    fn restore_mapped_geometry(&mut self, mapped: Vec<CoupledBody<f64>>) {
+        self.cover_scratch.bodies = mapped
+            .into_iter()
+            .map(|a| BodyCells {
+                anchor: Some(a),
+                ..BodyCells::default()
+            })
+            .collect();
+    }
+
     /// Drop the coverage and the buffers kept between calls of [`FluidLattice::cover_with_bodies`]: the next
-    /// call re-maps every body from scratch (same result, bitwise; for tests and to release memory).
+    /// call re-maps every body from scratch (same result, bitwise, without a remap tolerance; with one, the bodies
+    /// are mapped where they are at that call; for tests and to release memory).
     pub fn clear_coverage(&mut self) {
         self.coverage = None;
         self.cover_scratch = CoverScratch::default();
@@ -2256,9 +2430,18 @@ mod tests {
     /// The straightforward re-mapping (every body's cells from fresh kernel calls, all shares sorted by node
     /// then body): what `cover_with_bodies` must reproduce bitwise.
     fn reference<T: Real>(l: &FluidLattice<T>, bodies: &[CoupledBody<f64>]) -> Bits {
+        reference_mapped(l, bodies, bodies)
+    }
+
+    /// [`reference`] with the cells of `mapped` (their geometry) and the rigid velocities of `bodies`.
+    fn reference_mapped<T: Real>(
+        l: &FluidLattice<T>,
+        mapped: &[CoupledBody<f64>],
+        bodies: &[CoupledBody<f64>],
+    ) -> Bits {
         let s = l.shape;
         let mut entries = Vec::new();
-        for (k, body) in bodies.iter().enumerate() {
+        for (k, (body, moving)) in mapped.iter().zip(bodies).enumerate() {
             let Some([x0, x1, y0, y1]) = body_cell_range(body, s.nx, s.ny) else {
                 continue;
             };
@@ -2268,7 +2451,7 @@ mod tests {
                     let frac = fraction(x, y);
                     if !l.on_zou_he_side(x, y) && frac > 0.0 {
                         let v =
-                            rigid_velocity(body, lbdem_kernels::math::vector(x as f64, y as f64));
+                            rigid_velocity(moving, lbdem_kernels::math::vector(x as f64, y as f64));
                         let share = [frac, v[0], v[1]].map(|v| T::lit(v).to_f64_exact().to_bits());
                         entries.push((s.index(x, y) as u32, k as u32, share, [x as f64, y as f64]));
                     }
@@ -2587,6 +2770,272 @@ mod tests {
                 incremental_matches_from_scratch::<f64>(Boundaries::periodic(), 2, op, jump);
                 incremental_matches_from_scratch::<f32>(pressure_x32, 3, op, jump);
             }
+        }
+    }
+
+    /// With a remap tolerance the coverage is, at every call, bitwise the reference coverage of the geometry
+    /// the bodies were last mapped at, with the bodies' current rigid velocities; that geometry lies within the
+    /// tolerance of the bodies (any point of them), the bodies are mapped again as soon as one would not, a
+    /// lattice restored from a checkpoint taken between two re-mappings continues bitwise as the saved one, and
+    /// a tolerance of zero re-maps at every call.
+    fn remap_tolerance_case<T>(bc: Boundaries<T>, seed: u64, operator: SolidOperator)
+    where
+        T: Real + serde::Serialize + serde::de::DeserializeOwned,
+    {
+        let (nx, ny) = (61, 47);
+        let params = FluidParams {
+            tau: T::lit(0.9),
+            force: [T::zero(); 2],
+        };
+        let tolerance = 0.02;
+        let mut lattice = FluidLattice::<T>::new(nx, ny, bc, params).unwrap();
+        lattice.set_solid(|x, y| (x * 7 + y * 3) % 97 == 0);
+        lattice.set_solid_operator(operator);
+        lattice.set_remap_tolerance(tolerance).unwrap();
+        lattice.fill_equilibrium(|x, y| {
+            (
+                T::one(),
+                [
+                    T::lit(0.02 * (0.2 * y as f64).sin()),
+                    T::lit(0.01 * (0.3 * x as f64).cos()),
+                ],
+            )
+        });
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        let mut bodies = random_bodies(&mut rng, 30, nx as f64, ny as f64);
+        let mut restored: Option<FluidLattice<T>> = None;
+        let (mut kept, mut mapped_again) = (0, 0);
+        let mut previous: Vec<CoupledBody<f64>> = Vec::new();
+        for step in 0..150 {
+            lattice.cover_with_bodies(&bodies, Weighting::SolidFraction);
+            let anchors: Vec<CoupledBody<f64>> = lattice
+                .cover_scratch
+                .bodies
+                .iter()
+                .map(|c| c.anchor.expect("every body has its mapped geometry"))
+                .collect();
+            for (a, b) in anchors.iter().zip(&bodies) {
+                assert!(
+                    moved_at_most(a, b, tolerance),
+                    "step {step}: a body lies beyond the tolerance of its mapped geometry"
+                );
+            }
+            let same = |a: &CoupledBody<f64>, b: &CoupledBody<f64>| {
+                BodyCells::geometry_key(a) == BodyCells::geometry_key(b)
+            };
+            if step > 0 {
+                let all_kept = anchors.iter().zip(&previous).all(|(a, p)| same(a, p));
+                let all_new = anchors.iter().zip(&bodies).all(|(a, b)| same(a, b));
+                // One decision for all bodies: either every one kept its geometry or every one was mapped
+                // where it is now.
+                assert!(all_kept || all_new, "step {step}: bodies mapped apart");
+                if all_kept {
+                    kept += 1;
+                } else {
+                    mapped_again += 1;
+                }
+            }
+            previous = anchors.clone();
+            let cov = lattice.coverage.as_ref().unwrap();
+            assert!(
+                bits(cov) == reference_mapped(&lattice, &anchors, &bodies),
+                "step {step}: coverage is not that of the mapped geometry with the current velocities"
+            );
+            if operator == SolidOperator::LambdaConsistent {
+                assert!(
+                    cov.links == reference_links(&lattice),
+                    "step {step}: open links differ"
+                );
+            }
+            // A checkpoint between two re-mappings: the restored lattice continues bitwise.
+            if step == 60 {
+                let bytes = postcard::to_allocvec(&lattice).unwrap();
+                let mut r: FluidLattice<T> = postcard::from_bytes(&bytes).unwrap();
+                r.set_streaming(lattice.streaming());
+                restored = Some(r);
+            } else if let Some(r) = restored.as_mut() {
+                r.cover_with_bodies(&bodies, Weighting::SolidFraction);
+                assert!(
+                    bits(r.coverage.as_ref().unwrap()) == bits(cov),
+                    "step {step}: the restored lattice maps other cells"
+                );
+            }
+            lattice.step();
+            if let Some(r) = restored.as_mut() {
+                r.step();
+                let same = r
+                    .populations()
+                    .iter()
+                    .zip(lattice.populations().iter())
+                    .all(|(a, b)| a.to_f64_exact().to_bits() == b.to_f64_exact().to_bits());
+                assert!(
+                    same,
+                    "step {step}: the restored lattice's populations differ"
+                );
+            }
+            advance(&mut rng, &mut bodies, 0.1);
+        }
+        assert!(
+            kept >= 50 && mapped_again >= 5,
+            "kept {kept}, mapped again {mapped_again} of 149 calls"
+        );
+        assert!(lattice.populations().iter().all(|v| v.is_finite()));
+        // Zero tolerance: every body is mapped where it is at every call.
+        lattice.set_remap_tolerance(0.0).unwrap();
+        advance(&mut rng, &mut bodies, 0.1);
+        lattice.cover_with_bodies(&bodies, Weighting::SolidFraction);
+        assert!(bits(lattice.coverage.as_ref().unwrap()) == reference(&lattice, &bodies));
+    }
+
+    #[test]
+    fn a_remap_tolerance_keeps_the_mapped_cells_within_it_and_resumes_bitwise() {
+        let pressure_x = Boundaries {
+            west: SideCondition::Pressure { density: 1.01 },
+            east: SideCondition::Pressure { density: 1.0 },
+            south: SideCondition::Wall,
+            north: SideCondition::Wall,
+        };
+        for op in [
+            SolidOperator::LinearizedNonEquilibriumBounceBack,
+            SolidOperator::LambdaConsistent,
+        ] {
+            remap_tolerance_case::<f64>(pressure_x, 5, op);
+            remap_tolerance_case::<f32>(Boundaries::periodic(), 6, op);
+        }
+    }
+
+    /// `moved_at_most` against the motion of the body's points themselves: no point of a body (outline and
+    /// interior, in the body's frame) moves farther than the bound it tests, so a body it accepts lies within
+    /// the tolerance; and it accepts every body whose farthest point moved by less than about half the
+    /// tolerance (the largest displacement is at least max(|Δc|, 2r |sin(Δθ/2)|), so the bound |Δc| + r |Δθ|
+    /// is at most about twice it).
+    #[test]
+    fn moved_at_most_bounds_the_motion_of_every_point() {
+        let mut rng = ChaCha8Rng::seed_from_u64(21);
+        let (mut accepted, mut refused) = (0, 0);
+        for k in 0..4000 {
+            let a_axis = rng.random_range(0.5..9.0);
+            let b_axis = a_axis * rng.random_range(0.1..1.0);
+            let angle = rng.random_range(-4.0..4.0);
+            let shape = |angle| {
+                if k % 4 == 0 {
+                    BodyShape::Disc { radius: a_axis }
+                } else {
+                    BodyShape::Ellipse {
+                        semi_major: a_axis,
+                        semi_minor: b_axis,
+                        angle,
+                    }
+                }
+            };
+            let body = |c: [f64; 2], angle| CoupledBody {
+                center: lbdem_kernels::math::vector(c[0], c[1]),
+                velocity: lbdem_kernels::math::Vector::zeros(),
+                spin: 0.0,
+                shape: shape(angle),
+            };
+            let c0 = [rng.random_range(0.0..50.0), rng.random_range(0.0..50.0)];
+            let scale = 10f64.powf(rng.random_range(-4.0..-0.5));
+            let c1 = [
+                c0[0] + scale * rng.random_range(-1.0..1.0),
+                c0[1] + scale * rng.random_range(-1.0..1.0),
+            ];
+            let turn = scale * rng.random_range(-1.0..1.0) / a_axis;
+            let (a, b) = (body(c0, angle), body(c1, angle + turn));
+            // The largest displacement of a point of the shape, over its outline and a few inner rings.
+            let mut largest: f64 = 0.0;
+            for i in 0..720 {
+                let phi = i as f64 * std::f64::consts::TAU / 720.0;
+                for ring in [1.0, 0.7, 0.3] {
+                    let (u, v) = (ring * a_axis * phi.cos(), ring * b_axis * phi.sin());
+                    let at = |c: [f64; 2], th: f64| {
+                        let th = if k % 4 == 0 { 0.0 } else { th };
+                        [
+                            c[0] + u * th.cos() - v * th.sin(),
+                            c[1] + u * th.sin() + v * th.cos(),
+                        ]
+                    };
+                    let (p, q) = (at(c0, angle), at(c1, angle + turn));
+                    largest = largest.max((q[0] - p[0]).hypot(q[1] - p[1]));
+                }
+            }
+            let tolerance = scale * rng.random_range(0.2..3.0);
+            if moved_at_most(&a, &b, tolerance) {
+                accepted += 1;
+                assert!(
+                    largest <= tolerance * (1.0 + 1e-12),
+                    "case {k}: a point moved {largest} > {tolerance}"
+                );
+            } else {
+                refused += 1;
+                // (0.49, not 0.5: 2 sin(Δθ/2) falls short of Δθ by Δθ³/24.)
+                assert!(
+                    largest > 0.49 * tolerance,
+                    "case {k}: refused a body moved by {largest} <= 0.49 × {tolerance}"
+                );
+            }
+        }
+        assert!(
+            accepted > 500 && refused > 500,
+            "accepted {accepted}, refused {refused}"
+        );
+        // Another size, another kind of shape or anything not finite is never taken for the mapped body.
+        let disc = CoupledBody {
+            center: lbdem_kernels::math::vector(5.0, 5.0),
+            velocity: lbdem_kernels::math::Vector::zeros(),
+            spin: 0.0,
+            shape: BodyShape::Disc { radius: 2.0 },
+        };
+        let grown = CoupledBody {
+            shape: BodyShape::Disc {
+                radius: 2.0 + 1e-12,
+            },
+            ..disc
+        };
+        let ellipse = CoupledBody {
+            shape: BodyShape::Ellipse {
+                semi_major: 2.0,
+                semi_minor: 2.0,
+                angle: 0.0,
+            },
+            ..disc
+        };
+        let lost = CoupledBody {
+            center: lbdem_kernels::math::vector(f64::NAN, 5.0),
+            ..disc
+        };
+        assert!(moved_at_most(&disc, &disc, 0.01));
+        for other in [grown, ellipse, lost] {
+            assert!(!moved_at_most(&disc, &other, 0.2));
+        }
+    }
+
+    #[test]
+    fn a_remap_tolerance_outside_its_range_is_refused_naming_the_key() {
+        let mut l = FluidLattice::<f64>::new(
+            8,
+            8,
+            Boundaries::periodic(),
+            FluidParams {
+                tau: 0.8,
+                force: [0.0; 2],
+            },
+        )
+        .unwrap();
+        for bad in [
+            -0.01,
+            f64::NAN,
+            f64::INFINITY,
+            MAX_REMAP_TOLERANCE * 1.01,
+            1.0,
+        ] {
+            let e = l.set_remap_tolerance(bad).unwrap_err().to_string();
+            assert!(e.contains("fluid.remap_tolerance"), "{e}");
+            assert_eq!(l.remap_tolerance(), 0.0);
+        }
+        for good in [0.0, 0.05, MAX_REMAP_TOLERANCE] {
+            l.set_remap_tolerance(good).unwrap();
+            assert_eq!(l.remap_tolerance(), good);
         }
     }
 

@@ -2,7 +2,9 @@
 //! current populations (every plane in full, padding included), the step counter, the PSM coverage (covered
 //! nodes, shares, owners, the momentum exchanged at the last step, the weighting), the solid operator and the
 //! fluid collision (BGK, or TRT with its magic parameter, checked again on load) and the velocity profiles of
-//! profile sides (checked again on load). The special-node list and ΩΛ's open-link masks are derived from the
+//! profile sides (checked again on load), the remap tolerance and, with one, the geometry each body's cells were
+//! last mapped for (so that a resumed run keeps the same cells until the bodies move beyond the tolerance, as
+//! the saved run would have). The special-node list and ΩΛ's open-link masks are derived from the
 //! flags and the coverage and rebuilt. The populations are saved in the two-lattice layout
 //! whatever the streaming scheme and step parity (see [`FluidLattice::populations`]), and a loaded lattice starts
 //! from that layout with the default scheme (a run sets its own afterwards): either continues bitwise as the
@@ -16,6 +18,8 @@ use lbdem_kernels::fluid::step::FluidParams;
 use lbdem_kernels::Real;
 use serde::de::Error as _;
 use serde::{Deserialize, Deserializer, Serialize, Serializer};
+
+use lbdem_kernels::coupling::{BodyShape, CoupledBody};
 
 use super::{Coverage, FluidLattice};
 
@@ -34,6 +38,42 @@ struct Record<'a, T: Real> {
     collision: Collision<T>,
     coverage: Option<Cow<'a, Coverage<T>>>,
     profiles: Cow<'a, [Vec<[T; 2]>; 4]>,
+    remap_tolerance: f64,
+    /// Per body: shape kind (0 disc, 1 ellipse), centre x and y, radius or semi-axes, angle (lattice units).
+    mapped: Vec<[f64; 6]>,
+}
+
+fn encode(b: &CoupledBody<f64>) -> [f64; 6] {
+    let [cx, cy] = [b.center[0], b.center[1]];
+    match b.shape {
+        BodyShape::Disc { radius } => [0.0, cx, cy, radius, 0.0, 0.0],
+        BodyShape::Ellipse {
+            semi_major,
+            semi_minor,
+            angle,
+        } => [1.0, cx, cy, semi_major, semi_minor, angle],
+    }
+}
+
+fn decode([kind, cx, cy, a, b, angle]: [f64; 6]) -> Option<CoupledBody<f64>> {
+    if ![cx, cy, a, b, angle].iter().all(|v| v.is_finite()) {
+        return None;
+    }
+    let shape = match kind {
+        0.0 => BodyShape::Disc { radius: a },
+        1.0 => BodyShape::Ellipse {
+            semi_major: a,
+            semi_minor: b,
+            angle,
+        },
+        _ => return None,
+    };
+    Some(CoupledBody {
+        center: lbdem_kernels::math::vector(cx, cy),
+        velocity: lbdem_kernels::math::Vector::zeros(),
+        spin: 0.0,
+        shape,
+    })
 }
 
 impl<T: Real + Serialize> Serialize for FluidLattice<T> {
@@ -50,6 +90,8 @@ impl<T: Real + Serialize> Serialize for FluidLattice<T> {
             collision: self.collision,
             coverage: self.coverage.as_ref().map(Cow::Borrowed),
             profiles: Cow::Borrowed(&self.profiles),
+            remap_tolerance: self.remap_tolerance,
+            mapped: self.mapped_geometry().iter().map(encode).collect(),
         }
         .serialize(s)
     }
@@ -119,6 +161,16 @@ impl<'de, T: Real + Deserialize<'de>> Deserialize<'de> for FluidLattice<T> {
             .validate(&lattice.bc, nx, ny)
             .map_err(|e| D::Error::custom(format!("side profiles refused: {e:?}")))?;
         lattice.profiles = profiles;
+        lattice
+            .set_remap_tolerance(r.remap_tolerance)
+            .map_err(|e| D::Error::custom(e.to_string()))?;
+        let mapped: Option<Vec<CoupledBody<f64>>> = r.mapped.into_iter().map(decode).collect();
+        let Some(mapped) = mapped else {
+            return Err(D::Error::custom(
+                "the mapped grain geometry is not finite or names an unknown shape",
+            ));
+        };
+        lattice.restore_mapped_geometry(mapped);
         Ok(lattice)
     }
 }

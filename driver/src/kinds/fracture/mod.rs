@@ -40,7 +40,7 @@ use crate::engine::coupled::{CoupledWorld, LatticeMap};
 use crate::engine::dem::packing::{generate_packing, Packing};
 use crate::engine::dem::world::{DemWorld, PlatenControl, SampleBox, CRITICAL_STEP_SAFETY};
 use crate::engine::exec::{Exec, ExecTarget};
-use crate::engine::lattice::FluidLattice;
+use crate::engine::lattice::{check_remap_tolerance, FluidLattice};
 use crate::error::{positive, LbdemError, Result};
 use crate::input::limits::{self, Budget};
 use crate::observe::darcy::{permeability, SteadyFlow};
@@ -105,6 +105,11 @@ pub struct FractureFluid {
     /// Ω₂ and Ω₃ are refused (free grains).
     #[serde(default)]
     pub solid_operator: Option<SolidOperator>,
+    /// How far (lattice spacings) a grain may move before the grains are mapped onto the lattice again (default
+    /// 0: at every step, exact). A few hundredths make the fluid see each grain up to that far from where it is,
+    /// and save the re-mapping at most steps ([`FluidLattice::set_remap_tolerance`]; README, *Benchmarks*).
+    #[serde(default)]
+    pub remap_tolerance: f64,
 }
 
 fn default_margin() -> f64 {
@@ -395,6 +400,7 @@ impl FractureScene {
         if let Some(f) = &self.fluid {
             crate::error::fraction("fluid.fluid_radius", f.fluid_radius, "table 6.2: 0.6")?;
             positive("fluid.margin", f.margin, "e.g. 0.3 cm of free fluid")?;
+            check_remap_tolerance(f.remap_tolerance)?;
             self.fluid_setup(f, &mut Warnings::default())?;
         } else if l.pressure_drop > 0.0 {
             return Err(LbdemError::field(
@@ -831,6 +837,7 @@ pub fn prepare_packed(scene: &FractureScene, packing: Packing<f64>) -> Result<Fr
                     .checked_collision(setup.collision_default, u.tau)?,
             )?)?;
             lattice.set_solid_operator(setup.solid_operator);
+            lattice.set_remap_tolerance(f.remap_tolerance)?;
             let map = LatticeMap {
                 spacing: u.spacing,
                 timestep: u.timestep,
@@ -1822,5 +1829,28 @@ mod tests {
             .unwrap()
             .to_string();
         assert!(err.contains("heterogeneity[0].fluid_radius"), "{err}");
+    }
+
+    #[test]
+    fn a_remap_tolerance_is_read_and_refused_outside_its_range() {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/fracture/quick/base.toml");
+        let base = std::fs::read_to_string(path).unwrap();
+        let with = |value: &str| {
+            base.replace(
+                "\nfluid_radius =",
+                &format!("\nremap_tolerance = {value}\nfluid_radius ="),
+            )
+        };
+        let scene = FractureScene::from_toml(&with("0.05"), "t.toml").unwrap();
+        assert_eq!(scene.fluid.as_ref().unwrap().remap_tolerance, 0.05);
+        let scene = FractureScene::from_toml(&base, "t.toml").unwrap();
+        assert_eq!(scene.fluid.as_ref().unwrap().remap_tolerance, 0.0);
+        for bad in ["-0.01", "0.3", "nan"] {
+            let err = FractureScene::from_toml(&with(bad), "t.toml")
+                .err()
+                .unwrap()
+                .to_string();
+            assert!(err.contains("fluid.remap_tolerance"), "{bad}: {err}");
+        }
     }
 }
