@@ -219,12 +219,17 @@ checkpoint_interval = {interval}
     )
 }
 
-#[test]
-fn coupled_world_resumes_bitwise() {
+/// The coupled world of the demo scene (four discs).
+fn demo_world() -> CoupledWorld {
     let scene: DemoScene = Case::<CoupledDemo>::read(&demo_scene(100, "0"), "demo")
         .unwrap()
         .scene;
-    let mut a: CoupledWorld = scene.build_world().unwrap();
+    scene.build_world().unwrap()
+}
+
+#[test]
+fn coupled_world_resumes_bitwise() {
+    let mut a = demo_world();
     a.applied[1] = (lbdem_kernels::math::vector(1e-4, -2e-4), 1e-3);
     a.grain_fluid_radius = vec![1.0, 0.9, 0.8, 0.95];
     for _ in 0..60 {
@@ -238,10 +243,7 @@ fn coupled_world_resumes_bitwise() {
 /// re-mappings keeps the mapped geometry, and the resumed world maps the same cells.
 #[test]
 fn coupled_world_with_a_remap_tolerance_resumes_bitwise() {
-    let scene: DemoScene = Case::<CoupledDemo>::read(&demo_scene(100, "0"), "demo")
-        .unwrap()
-        .scene;
-    let mut a: CoupledWorld = scene.build_world().unwrap();
+    let mut a = demo_world();
     a.fluid.set_remap_tolerance(0.05).unwrap();
     for _ in 0..61 {
         a.step();

@@ -2473,6 +2473,30 @@ mod tests {
         b
     }
 
+    /// A lattice with a few obstacle nodes (so that the open links meet them too), solid operator `operator`,
+    /// and a smooth flow, for the re-mapping tests.
+    fn obstacle_lattice<T: Real>(
+        nx: usize,
+        ny: usize,
+        bc: Boundaries<T>,
+        params: FluidParams<T>,
+        operator: SolidOperator,
+    ) -> FluidLattice<T> {
+        let mut l = FluidLattice::<T>::new(nx, ny, bc, params).unwrap();
+        l.set_solid(|x, y| (x * 7 + y * 3) % 97 == 0);
+        l.set_solid_operator(operator);
+        l.fill_equilibrium(|x, y| {
+            (
+                T::one(),
+                [
+                    T::lit(0.02 * (0.2 * y as f64).sin()),
+                    T::lit(0.01 * (0.3 * x as f64).cos()),
+                ],
+            )
+        });
+        l
+    }
+
     /// Random discs and ellipses overlapping each other and the lattice sides.
     fn random_bodies(
         rng: &mut ChaCha8Rng,
@@ -2569,22 +2593,8 @@ mod tests {
             tau: T::lit(0.9),
             force: [T::zero(); 2],
         };
-        let mut incremental = FluidLattice::<T>::new(nx, ny, bc, params).unwrap();
-        let mut scratch = FluidLattice::<T>::new(nx, ny, bc, params).unwrap();
-        for l in [&mut incremental, &mut scratch] {
-            // A few obstacle nodes, so that the open links meet them too.
-            l.set_solid(|x, y| (x * 7 + y * 3) % 97 == 0);
-            l.set_solid_operator(operator);
-            l.fill_equilibrium(|x, y| {
-                (
-                    T::one(),
-                    [
-                        T::lit(0.02 * (0.2 * y as f64).sin()),
-                        T::lit(0.01 * (0.3 * x as f64).cos()),
-                    ],
-                )
-            });
-        }
+        let mut incremental = obstacle_lattice(nx, ny, bc, params, operator);
+        let mut scratch = obstacle_lattice(nx, ny, bc, params, operator);
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
         let mut bodies = random_bodies(&mut rng, 30, nx as f64, ny as f64);
         let mut shares = 0;
@@ -2788,19 +2798,8 @@ mod tests {
             force: [T::zero(); 2],
         };
         let tolerance = 0.02;
-        let mut lattice = FluidLattice::<T>::new(nx, ny, bc, params).unwrap();
-        lattice.set_solid(|x, y| (x * 7 + y * 3) % 97 == 0);
-        lattice.set_solid_operator(operator);
+        let mut lattice = obstacle_lattice(nx, ny, bc, params, operator);
         lattice.set_remap_tolerance(tolerance).unwrap();
-        lattice.fill_equilibrium(|x, y| {
-            (
-                T::one(),
-                [
-                    T::lit(0.02 * (0.2 * y as f64).sin()),
-                    T::lit(0.01 * (0.3 * x as f64).cos()),
-                ],
-            )
-        });
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
         let mut bodies = random_bodies(&mut rng, 30, nx as f64, ny as f64);
         let mut restored: Option<FluidLattice<T>> = None;
