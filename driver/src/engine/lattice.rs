@@ -2473,6 +2473,18 @@ mod tests {
         b
     }
 
+    /// Pressure sides west (ρ = 1.01) and east (ρ = 1), walls south and north, for the re-mapping tests.
+    fn pressure_x<T: Real>() -> Boundaries<T> {
+        Boundaries {
+            west: SideCondition::Pressure {
+                density: T::lit(1.01),
+            },
+            east: SideCondition::Pressure { density: T::one() },
+            south: SideCondition::Wall,
+            north: SideCondition::Wall,
+        }
+    }
+
     /// A lattice with a few obstacle nodes (so that the open links meet them too), solid operator `operator`,
     /// and a smooth flow, for the re-mapping tests.
     fn obstacle_lattice<T: Real>(
@@ -2759,26 +2771,14 @@ mod tests {
 
     #[test]
     fn incremental_cover_is_bitwise_a_full_recover() {
-        let pressure_x = Boundaries {
-            west: SideCondition::Pressure { density: 1.01 },
-            east: SideCondition::Pressure { density: 1.0 },
-            south: SideCondition::Wall,
-            north: SideCondition::Wall,
-        };
-        let pressure_x32 = Boundaries {
-            west: SideCondition::Pressure { density: 1.01f32 },
-            east: SideCondition::Pressure { density: 1.0 },
-            south: SideCondition::Wall,
-            north: SideCondition::Wall,
-        };
         for op in [
             SolidOperator::MovingWallBounceBack,
             SolidOperator::LambdaConsistent,
         ] {
             for jump in [40.0, 0.1] {
-                incremental_matches_from_scratch::<f64>(pressure_x, 1, op, jump);
+                incremental_matches_from_scratch::<f64>(pressure_x(), 1, op, jump);
                 incremental_matches_from_scratch::<f64>(Boundaries::periodic(), 2, op, jump);
-                incremental_matches_from_scratch::<f32>(pressure_x32, 3, op, jump);
+                incremental_matches_from_scratch::<f32>(pressure_x(), 3, op, jump);
             }
         }
     }
@@ -2888,17 +2888,11 @@ mod tests {
 
     #[test]
     fn a_remap_tolerance_keeps_the_mapped_cells_within_it_and_resumes_bitwise() {
-        let pressure_x = Boundaries {
-            west: SideCondition::Pressure { density: 1.01 },
-            east: SideCondition::Pressure { density: 1.0 },
-            south: SideCondition::Wall,
-            north: SideCondition::Wall,
-        };
         for op in [
             SolidOperator::LinearizedNonEquilibriumBounceBack,
             SolidOperator::LambdaConsistent,
         ] {
-            remap_tolerance_case::<f64>(pressure_x, 5, op);
+            remap_tolerance_case::<f64>(pressure_x(), 5, op);
             remap_tolerance_case::<f32>(Boundaries::periodic(), 6, op);
         }
     }
