@@ -80,7 +80,14 @@ pub fn unit<T: Real>(theta: AngVector<T>) -> Vector<T> {
 /// The rotation by `angle` (counter-clockwise), with the `libm` crate's cosine and sine.
 #[inline(always)]
 pub fn rotation<T: Real>(angle: AngVector<T>) -> Rotation<T> {
-    Unit::new_unchecked(Complex::new(angle.portable_cos(), angle.portable_sin()))
+    rotation_from_cos_sin(angle.portable_cos(), angle.portable_sin())
+}
+
+/// The rotation whose cosine and sine are given (already computed, e.g. a placed shape's): [`rotation`] of θ is
+/// `rotation_from_cos_sin(cos θ, sin θ)` with `libm`'s cosine and sine.
+#[inline(always)]
+pub fn rotation_from_cos_sin<T: Real>(cos: T, sin: T) -> Rotation<T> {
+    Unit::new_unchecked(Complex::new(cos, sin))
 }
 
 /// `a` rotated by `r`: (c a_x − s a_y, s a_x + c a_y) with c + i s the rotation's unit complex number.

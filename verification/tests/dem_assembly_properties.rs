@@ -18,9 +18,9 @@
 //! **Tolerances.** Sums of n contact forces of size ≤ F carry at most n ulp of n F, so balances are checked
 //! within 64 n ε Σ|term| (Σ|term| the sum of the magnitudes added). Chunked against unsplit: bitwise.
 use lbdem_kernels::dem::assembly::{
-    add_bond_forces, add_pair_forces, add_wall_contact_forces, bond_forces, integrate_all,
-    pair_contacts, pair_contacts_placed, wall_contacts_scratch_len, wall_loads, AssemblyError,
-    ContactModel, ContactSums, WallBody, WallContactForce, WallLoad,
+    add_bond_forces, add_pair_forces, add_wall_contact_forces, bond_forces, bond_forces_placed,
+    integrate_all, pair_contacts, pair_contacts_placed, wall_contacts_scratch_len, wall_loads,
+    AssemblyError, ContactModel, ContactSums, WallBody, WallContactForce, WallLoad,
 };
 use lbdem_kernels::dem::bond::{Bond, BondForce, BondLaw, ParallelBond, PointBond};
 use lbdem_kernels::dem::contact::{
@@ -180,6 +180,76 @@ fn walls(tilt: f64, speed: [f64; 3], active: [bool; 3]) -> [WallBody<f64>; 3] {
     })
 }
 
+/// The bits of a bond slot (forces, torques, break record).
+fn slot_bits(s: &BondForce<f64>) -> Vec<u64> {
+    let mut v = vec![
+        s.force_on_i[0].to_bits(),
+        s.force_on_i[1].to_bits(),
+        s.force_on_j[0].to_bits(),
+        s.force_on_j[1].to_bits(),
+        s.torque_on_i.to_bits(),
+        s.torque_on_j.to_bits(),
+    ];
+    if let Some(b) = &s.broke {
+        v.extend([
+            b.mode as u64,
+            b.orientation.to_bits(),
+            b.position[0].to_bits(),
+            b.position[1].to_bits(),
+            b.load.to_bits(),
+        ]);
+    }
+    v
+}
+
+/// Eq. 6.13 written out (an independent statement of the point bond): material points p = c + R(θ) g,
+/// Δx = (p_j − p_i) − R(φ̄) g₀ with φ̄ the mean rotation since bonding, F_j = −k_b Δx at x = (p_i + p_j)/2;
+/// broken when |F| ≥ F_crit (tension, compression or shear by the larger part of Δx along R(φ̄) n₀).
+fn point_bond_by_formula(
+    b: &PointBond<f64>,
+    i: &Particle<f64>,
+    j: &Particle<f64>,
+) -> BondForce<f64> {
+    use lbdem_kernels::dem::bond::{BondBreak, BreakMode};
+    use lbdem_kernels::math::{cross, norm, perp, rotate, rotate_by, rotation};
+    if !b.intact {
+        return BondForce::zero();
+    }
+    let pi = i.position + rotate(&b.anchor_i, i.angle);
+    let pj = j.position + rotate(&b.anchor_j, j.angle);
+    let x = (pi + pj) * 0.5;
+    let r = rotation(0.5 * ((i.angle - b.rest_angles[0]) + (j.angle - b.rest_angles[1])));
+    let dx = (pj - pi) - rotate_by(&r, &b.rest_gap);
+    let n = rotate_by(&r, &b.rest_normal);
+    let force_on_j = dx * (-b.stiffness);
+    let magnitude = norm(&force_on_j);
+    if magnitude >= b.strength {
+        let (normal, shear) = (dx.dot(&n), dx.dot(&perp(&n)).abs());
+        let mode = if shear > normal.abs() {
+            BreakMode::Shear
+        } else if normal >= 0.0 {
+            BreakMode::Tension
+        } else {
+            BreakMode::Compression
+        };
+        let mut s = BondForce::zero();
+        s.broke = Some(BondBreak {
+            mode,
+            orientation: lbdem_kernels::Real::portable_atan2(n[1], n[0]),
+            position: x,
+            load: magnitude,
+        });
+        return s;
+    }
+    BondForce {
+        force_on_i: -force_on_j,
+        force_on_j,
+        torque_on_i: cross(&(x - i.position), &(-force_on_j)),
+        torque_on_j: cross(&(x - j.position), &force_on_j),
+        broke: None,
+    }
+}
+
 proptest! {
     #![proptest_config(config(128))]
 
@@ -240,6 +310,41 @@ proptest! {
         }
         for (a, b) in shear.iter().zip(shear2.iter().rev()) {
             prop_assert_eq!(a.to_bits(), b.to_bits());
+        }
+    }
+
+    /// The bond pass the driver runs (`bond_forces_placed`, each particle's sine and cosine taken once from
+    /// its placed shape) gives bitwise the slots and bond states of `bond_forces`, and a point bond's slot is
+    /// bitwise eq. 6.13 written out with rotations by the particles' angles (the formula before placed
+    /// shapes were passed in), breaks included.
+    #[test]
+    fn the_placed_bond_pass_is_bitwise_the_bond_pass_and_the_formula(
+        ps in prop::collection::vec(particle(), 2..8),
+        picks in prop::collection::vec((0usize..8, 0usize..8, any::<bool>(), prop_oneof![Just(1e9), 1.0f64..400.0]), 0..12),
+        dt in 1e-4f64..5e-2,
+    ) {
+        let bonds0 = make_bonds(&ps, &picks);
+        let now = moved(&ps, dt);
+        let placed: Vec<_> = now.iter().map(Particle::placed).collect();
+        let (mut a, mut b) = (bonds0.clone(), bonds0.clone());
+        let mut sa = vec![BondForce::zero(); a.len()];
+        let mut sb = vec![BondForce::zero(); b.len()];
+        bond_forces(&now, &mut a, 1e-3, &mut sa).expect("valid input");
+        bond_forces_placed(&now, &placed, &mut b, 1e-3, &mut sb).expect("valid input");
+        for (k, ((x, y), bond)) in sa.iter().zip(&sb).zip(&bonds0).enumerate() {
+            prop_assert_eq!(slot_bits(x), slot_bits(y), "bond {}", k);
+            prop_assert_eq!(a[k].intact(), b[k].intact());
+            if let BondLaw::Point(pb) = &bond.law {
+                let [i, j] = bond.pair;
+                prop_assert_eq!(slot_bits(x), slot_bits(&point_bond_by_formula(pb, &now[i], &now[j])), "bond {}", k);
+            }
+        }
+        // A placed list shorter than the particles is refused before anything is written.
+        if !b.is_empty() {
+            prop_assert_eq!(
+                bond_forces_placed(&now, &placed[..now.len() - 1], &mut b, 1e-3, &mut sb),
+                Err(AssemblyError::BufferLength)
+            );
         }
     }
 

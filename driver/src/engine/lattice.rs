@@ -7,7 +7,8 @@
 //! node's, and special and covered nodes are computed in a fixed order, so the result is bitwise the same for
 //! any number of threads or bands.
 use lbdem_kernels::coupling::{
-    body_cell_range, reduce_exchange, rigid_velocity, BodyShape, CoupledBody, PreparedBody,
+    body_cell_range, reduce_exchange, reduce_exchange_of, rigid_velocity, BodyShape, CoupledBody,
+    PreparedBody,
 };
 use lbdem_kernels::coverage::{ellipse_cell_grid, ellipse_grid_fractions, CellGrid};
 use lbdem_kernels::fluid::aa::{
@@ -29,6 +30,8 @@ use lbdem_kernels::math::{Point, Vector};
 use lbdem_kernels::Real;
 use rayon::prelude::*;
 use std::borrow::Cow;
+use std::sync::atomic::{AtomicU64, Ordering as AtomicOrdering};
+use std::sync::Mutex;
 
 pub use crate::engine::exec::Streaming;
 use crate::engine::exec::{
@@ -37,6 +40,13 @@ use crate::engine::exec::{
 use crate::error::{LbdemError, Result};
 
 mod persist;
+
+/// A fresh identity for a list a cache is keyed on (a coverage's node lists, the special-node list): never 0,
+/// never handed out twice in a process, so a cache keyed on it cannot be taken for another list's.
+fn next_list_id() -> u64 {
+    static IDS: AtomicU64 = AtomicU64::new(1);
+    IDS.fetch_add(1, AtomicOrdering::Relaxed)
+}
 
 /// A D2Q9 lattice with its buffers.
 pub struct FluidLattice<T: Real> {
@@ -75,8 +85,61 @@ pub struct FluidLattice<T: Real> {
     aa_special: Vec<[T; Q]>,
     aa_covered: Vec<Option<[T; Q]>>,
     /// In-place scheme: the covered nodes that are special (indices into the covered list), those of
-    /// `aa_covered`.
+    /// `aa_covered`, and the identities (coverage layout, special list) they were found for: they are kept
+    /// while both lists stand (between re-mappings under a remap tolerance, or with bodies that keep their
+    /// nodes) instead of looked up again at every step.
     aa_covered_special: Vec<usize>,
+    aa_covered_special_key: Option<(u64, u64)>,
+    /// How many times `aa_covered_special` was found anew (for tests).
+    aa_covered_special_found: u64,
+    /// Identity of `special` ([`next_list_id`]), renewed whenever the list is.
+    special_id: u64,
+    /// The shares grouped by body, for the force reduction in parallel over bodies.
+    owner_index: Mutex<OwnerIndex>,
+}
+
+/// The shares of a coverage grouped by owner (`order[offsets[p]..offsets[p + 1]]`: body p's share indices,
+/// increasing), for [`FluidLattice::solid_forces_and_torques`] in parallel over bodies, bitwise the serial
+/// reduction. Built for one coverage layout and body count; since building it costs about what one serial
+/// reduction does, it is built at the second reduction of a layout (a layout the re-mapping keeps for many
+/// steps: a remap tolerance, or bodies that keep their nodes), not at the first.
+#[derive(Default)]
+struct OwnerIndex {
+    /// (coverage layout, bodies) this index is for, if built.
+    built_for: Option<(u64, usize)>,
+    /// (coverage layout, bodies) of the last reduction.
+    last: Option<(u64, usize)>,
+    offsets: Vec<u32>,
+    order: Vec<u32>,
+    /// Reductions made with the index (for tests).
+    used: u64,
+}
+
+impl OwnerIndex {
+    /// Group the shares whose owner is below `bodies` by owner, in share order (a counting sort); shares of
+    /// other owners are left out, as the serial reduction ignores them.
+    fn build(&mut self, owners: &[u32], bodies: usize, key: (u64, usize)) {
+        self.offsets.clear();
+        self.offsets.resize(bodies + 1, 0);
+        for &o in owners {
+            if (o as usize) < bodies {
+                self.offsets[o as usize + 1] += 1;
+            }
+        }
+        for p in 0..bodies {
+            self.offsets[p + 1] += self.offsets[p];
+        }
+        self.order.clear();
+        self.order.resize(self.offsets[bodies] as usize, 0);
+        let mut next = self.offsets[..bodies].to_vec();
+        for (k, &o) in owners.iter().enumerate() {
+            if let Some(n) = next.get_mut(o as usize) {
+                self.order[*n as usize] = k as u32;
+                *n += 1;
+            }
+        }
+        self.built_for = Some(key);
+    }
 }
 
 /// Buffers kept between calls of [`FluidLattice::cover_with_bodies`]: the cells of each body, and per-node
@@ -868,6 +931,10 @@ type CoveredBand<'a, T> = (usize, usize, &'a mut [[T; 2]]);
 /// each share at the last step.
 #[derive(Clone, serde::Serialize, serde::Deserialize)]
 struct Coverage<T> {
+    /// Identity of the lists (nodes, offsets, owners, share nodes) for caches keyed on them
+    /// ([`next_list_id`]; renewed whenever they are built, 0 until then for a coverage read from a checkpoint).
+    #[serde(skip)]
+    layout: u64,
     nodes: Vec<u32>,
     offsets: Vec<u32>,
     shares: Vec<SolidShare<T>>,
@@ -1012,6 +1079,10 @@ impl<T: Real> FluidLattice<T> {
             aa_special: Vec::new(),
             aa_covered: Vec::new(),
             aa_covered_special: Vec::new(),
+            aa_covered_special_key: None,
+            aa_covered_special_found: 0,
+            special_id: 0,
+            owner_index: Mutex::new(OwnerIndex::default()),
         };
         lattice.reclassify();
         lattice.fill_equilibrium(|_, _| (T::one(), [T::zero(); 2]));
@@ -1162,6 +1233,7 @@ impl<T: Real> FluidLattice<T> {
             self.special_mask[n as usize] = true;
         }
         self.special = list;
+        self.special_id = next_list_id();
     }
 
     /// Set every node to the equilibrium of `state(x, y) = (ρ, u)` (stored as post-collision populations).
@@ -1342,8 +1414,11 @@ impl<T: Real> FluidLattice<T> {
             ),
         };
         let total = cov.shares.len();
-        cov.exchange.clear();
+        // Zeroed in parallel (2 MB in the full-size fracture test: serial, it was 1 % of the two-thread step).
         cov.exchange.resize(total, [T::zero(); 2]);
+        cov.exchange
+            .par_chunks_mut(1 << 14)
+            .for_each(|c| c.fill([T::zero(); 2]));
         if links_kept {
             // The masks of the last call (`cov.links`) stand; the spare list goes back.
             scratch.links.spare = full_now;
@@ -1430,6 +1505,7 @@ impl<T: Real> FluidLattice<T> {
         let total_nodes: usize = plans.iter().map(|p| p.nodes).sum();
         let total: usize = plans.iter().map(|p| p.shares).sum();
         let mut cov = coverage.unwrap_or_else(|| Coverage {
+            layout: 0,
             nodes: Vec::new(),
             offsets: Vec::new(),
             shares: Vec::new(),
@@ -1440,6 +1516,7 @@ impl<T: Real> FluidLattice<T> {
             links: Vec::new(),
         });
         cov.weighting = weighting;
+        cov.layout = next_list_id();
         scratch.src.resize(total, 0);
         // Every entry below is overwritten by its band.
         let zero = SolidShare {
@@ -1592,6 +1669,7 @@ impl<T: Real> FluidLattice<T> {
     ) -> Result<()> {
         let s = self.shape;
         let mut cov = Coverage {
+            layout: next_list_id(),
             nodes: Vec::new(),
             offsets: vec![0],
             shares: Vec::new(),
@@ -1866,15 +1944,46 @@ impl<T: Real> FluidLattice<T> {
                 periodic[0].then_some(self.shape.nx as f64),
                 periodic[1].then_some(self.shape.ny as f64),
             ];
-            reduce_exchange(
-                &c.share_nodes,
-                &c.owners,
-                &exchange,
-                centers,
-                periods,
-                &mut forces,
-                &mut torques,
-            );
+            let key = (c.layout, centers.len());
+            let mut index = self
+                .owner_index
+                .lock()
+                .unwrap_or_else(std::sync::PoisonError::into_inner);
+            // The second reduction of a layout builds the index (the first may be the only one).
+            if c.layout != 0 && index.built_for != Some(key) && index.last == Some(key) {
+                index.build(&c.owners, centers.len(), key);
+            }
+            index.last = Some(key);
+            if index.built_for == Some(key) {
+                // In parallel over bodies, each body's shares in share order: the serial pass's sums.
+                let index = &mut *index;
+                index.used += 1;
+                let (offsets, order) = (&index.offsets, &index.order);
+                forces
+                    .par_iter_mut()
+                    .zip(torques.par_iter_mut())
+                    .enumerate()
+                    .for_each(|(p, (f, t))| {
+                        let shares = &order[offsets[p] as usize..offsets[p + 1] as usize];
+                        (*f, *t) = reduce_exchange_of(
+                            &c.share_nodes,
+                            &exchange,
+                            shares,
+                            centers[p],
+                            periods,
+                        );
+                    });
+            } else {
+                reduce_exchange(
+                    &c.share_nodes,
+                    &c.owners,
+                    &exchange,
+                    centers,
+                    periods,
+                    &mut forces,
+                    &mut torques,
+                );
+            }
         }
         (forces, torques)
     }
@@ -1917,6 +2026,14 @@ impl<T: Real> FluidLattice<T> {
             flags: &self.flags,
         };
         let mask = &self.special_mask;
+        // The identities of the coverage's lists and of the special list, which the covered special nodes
+        // found at an earlier step are kept for (a coverage read from a checkpoint gets its identity here).
+        let special_key = self.coverage.as_mut().map(|c| {
+            if c.layout == 0 {
+                c.layout = next_list_id();
+            }
+            (c.layout, self.special_id)
+        });
         let psm = self.coverage.as_ref().map(|c| PsmParams {
             tau: params.tau,
             weighting: c.weighting,
@@ -1943,15 +2060,20 @@ impl<T: Real> FluidLattice<T> {
         };
         // The covered nodes that are special, as indices into the covered list, increasing: each special node
         // looked up in the covered list (both are in increasing node order), so the cost is that of the special
-        // nodes, not of a scan of every covered node.
+        // nodes, not of a scan of every covered node; kept from the last step while both lists are the same
+        // lists (1–2 % of the full-size fracture step, serial, when looked up at every step).
         let mut covered_special = std::mem::take(&mut self.aa_covered_special);
-        covered_special.clear();
-        if !covered.is_empty() {
-            covered_special.extend(
-                self.special
-                    .iter()
-                    .filter_map(|n| covered.binary_search(n).ok()),
-            );
+        if special_key.is_none() || special_key != self.aa_covered_special_key {
+            covered_special.clear();
+            if !covered.is_empty() {
+                covered_special.extend(
+                    self.special
+                        .iter()
+                        .filter_map(|n| covered.binary_search(n).ok()),
+                );
+            }
+            self.aa_covered_special_key = special_key;
+            self.aa_covered_special_found += 1;
         }
         // Phase 1: the special nodes, then the covered ones among them with their exchange (a few per
         // thousand of the covered nodes: serial).
@@ -2612,6 +2734,8 @@ mod tests {
         let mut shares = 0;
         // Rows of the last build without and with overlapping segments, summed over the calls.
         let mut rows = [0; 2];
+        // Steps at which some covered node was also special.
+        let mut covered_special_steps = 0;
         for step in 0..120 {
             // Now and then the body list changes length (bodies removed, then new ones).
             if step == 40 {
@@ -2680,11 +2804,37 @@ mod tests {
                 .zip(scratch.populations().iter())
                 .all(|(a, b)| a.to_f64_exact().to_bits() == b.to_f64_exact().to_bits());
             assert!(same, "step {step}: populations differ");
+            covered_special_steps += usize::from(!incremental.aa_covered_special.is_empty());
             let centers: Vec<Point<f64>> = bodies.iter().map(|b| b.center).collect();
             let (fa, ta) = incremental.solid_forces_and_torques(&centers);
             let (fb, tb) = scratch.solid_forces_and_torques(&centers);
-            assert!(fa == fb && ta.iter().zip(&tb).all(|(a, b)| a.to_bits() == b.to_bits()));
+            assert!(
+                fa.iter()
+                    .zip(&fb)
+                    .all(|(a, b)| a[0].to_bits() == b[0].to_bits()
+                        && a[1].to_bits() == b[1].to_bits())
+                    && ta.iter().zip(&tb).all(|(a, b)| a.to_bits() == b.to_bits()),
+                "step {step}: forces or torques differ"
+            );
             advance(&mut rng, &mut bodies, jump);
+        }
+        // Both lattices step the same populations and forces above, bitwise: the incremental one with the
+        // covered special nodes kept from the last step while the coverage's lists stood, and its forces
+        // reduced in parallel over bodies once a layout had stood for a reduction; the other found them anew
+        // and reduced serially at every step (its coverage is rebuilt from nothing every step).
+        let found = incremental.aa_covered_special_found;
+        let used = incremental.owner_index.lock().unwrap().used;
+        assert!(
+            covered_special_steps > 60,
+            "covered special nodes at {covered_special_steps} steps"
+        );
+        assert_eq!(scratch.aa_covered_special_found, 120);
+        assert_eq!(scratch.owner_index.lock().unwrap().used, 0);
+        if jump <= 1.0 {
+            assert!(
+                found < 100 && used > 20,
+                "found anew {found}, parallel reductions {used}"
+            );
         }
         // The comparison saw real coverage (about 30 bodies of ~50 cells each per step).
         assert!(shares > 120 * 300, "only {shares} shares in 120 steps");

@@ -9,7 +9,7 @@
 //!    grown by [`VERLET_MOVE`] × the skin): the same pair list bit for bit, without a grid pass every step;
 //!    [`carry_contact_history`] (shear forces of persisting contacts);
 //! 2. contacts: [`pair_contacts_placed`] (closest approach + linear contact law per pair), [`add_pair_forces`];
-//! 3. bonds: [`bond_forces`] (point bond of eq. 6.13 or Potyondy & Cundall 2004 parallel bond per bond),
+//! 3. bonds: [`bond_forces_placed`] (point bond of eq. 6.13 or Potyondy & Cundall 2004 parallel bond per bond),
 //!    [`add_bond_forces`]; each break recorded as a [`BreakRecord`] (step, position, mode, orientation, load);
 //! 4. platens: [`add_wall_contact_forces`] with each platen's own velocity (a moving wall), [`wall_loads`];
 //! 5. applied forces on chosen particles (`external_force`, `external_torque`);
@@ -31,7 +31,7 @@
 //! Units: any consistent system (the dry scenes use cgs: cm, g, s, dyne; 2-D stresses are force per unit
 //! length of a unit-thickness sample, dyne/cm ≡ dyne/cm² × 1 cm).
 use lbdem_kernels::dem::assembly::{
-    add_bond_forces, add_pair_forces, add_wall_contact_forces, bond_forces, integrate_all,
+    add_bond_forces, add_pair_forces, add_wall_contact_forces, bond_forces_placed, integrate_all,
     pair_contacts_placed, wall_loads, ContactModel, WallBody, WallContactForce, WallLoad,
 };
 pub use lbdem_kernels::dem::bond::{Bond, BondLaw};
@@ -825,7 +825,7 @@ impl<T: Real> DemWorld<T> {
             self.bonds
                 .par_chunks_mut(PARALLEL_CHUNK)
                 .zip(self.bond_forces.par_chunks_mut(PARALLEL_CHUNK))
-                .try_for_each(|(bonds, out)| bond_forces(particles, bonds, dt, out))
+                .try_for_each(|(bonds, out)| bond_forces_placed(particles, &placed, bonds, dt, out))
                 .expect(INVALID);
             add_bond_forces(
                 &self.bonds,
