@@ -226,33 +226,6 @@ pub fn reduce_exchange<T: Real>(
     }
 }
 
-/// The force and torque on one body from the shares `shares` (indices into `share_nodes` and `exchange`, in
-/// increasing order: the body's shares in share order) about its centre `center`: the sums [`reduce_exchange`]
-/// forms for that body, bitwise (the same additions in the same order, from zero), so that the bodies of a
-/// coverage can be reduced independently, in parallel, with the serial pass's result. Indices past the end of
-/// either array are ignored.
-pub fn reduce_exchange_of<T: Real>(
-    share_nodes: &[[T; 2]],
-    exchange: &[[T; 2]],
-    shares: &[u32],
-    center: Point<T>,
-    periods: [Option<T>; 2],
-) -> (Vector<T>, T) {
-    let mut force = Vector::zeros();
-    let mut torque = T::zero();
-    for &k in shares {
-        let (Some(node), Some(ex)) = (share_nodes.get(k as usize), exchange.get(k as usize)) else {
-            continue;
-        };
-        force[0] += ex[0];
-        force[1] += ex[1];
-        let rx = min_image(node[0] - center[0], periods[0]);
-        let ry = min_image(node[1] - center[1], periods[1]);
-        torque += rx * ex[1] - ry * ex[0];
-    }
-    (force, torque)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;

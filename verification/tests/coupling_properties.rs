@@ -11,8 +11,8 @@
 //! body, the reach of a scaled body, a quarter turn, which permutes and negates exactly) it is compared
 //! bitwise.
 use lbdem_kernels::coupling::{
-    body_cell_fraction, body_cell_range, reduce_exchange, reduce_exchange_of, rigid_velocity,
-    BodyShape, CoupledBody, PreparedBody,
+    body_cell_fraction, body_cell_range, reduce_exchange, rigid_velocity, BodyShape, CoupledBody,
+    PreparedBody,
 };
 use lbdem_kernels::coverage::{disc_cell_fraction, ellipse_cell_fraction};
 use lbdem_kernels::math::{Point, Vector};
@@ -300,8 +300,7 @@ proptest! {
     /// The reduction is bitwise the direct sum in share order (each body's additions one after the other, as
     /// `direct_sums` writes them), whether the shares of different bodies interleave share by share or come
     /// in runs of one body (the coverage's lists: a body's cells along a row), including runs of bodies out of
-    /// range between them; and each body reduced alone from its share indices (`reduce_exchange_of`) is the
-    /// same sum, bitwise.
+    /// range between them.
     #[test]
     fn reduction_is_bitwise_the_sum_in_share_order(
         centers in prop::collection::vec([0.0f64..40.0, 0.0f64..40.0], 1..5),
@@ -323,20 +322,10 @@ proptest! {
         for shares in [&s, &in_runs] {
             let (f, t) = kernel_reduce(shares, &centers, periods);
             let (wf, wt, _) = direct_sums(shares, &centers, periods);
-            let nodes: Vec<[f64; 2]> = shares.iter().map(|x| x.0).collect();
-            let ex: Vec<[f64; 2]> = shares.iter().map(|x| x.2).collect();
             for p in 0..centers.len() {
                 prop_assert_eq!(f[p][0].to_bits(), wf[p][0].to_bits(), "body {} force x", p);
                 prop_assert_eq!(f[p][1].to_bits(), wf[p][1].to_bits(), "body {} force y", p);
                 prop_assert_eq!(t[p].to_bits(), wt[p].to_bits(), "body {} torque", p);
-                // One body alone from its share indices (increasing; an index past the end is ignored): the
-                // same bits, so bodies can be reduced in parallel.
-                let mut own: Vec<u32> = (0..shares.len() as u32).filter(|&k| shares[k as usize].1 == p as u32).collect();
-                own.push(shares.len() as u32);
-                let (fp, tp) = reduce_exchange_of(&nodes, &ex, &own, Point::from(centers[p]), periods);
-                prop_assert_eq!(fp[0].to_bits(), wf[p][0].to_bits(), "body {} alone, force x", p);
-                prop_assert_eq!(fp[1].to_bits(), wf[p][1].to_bits(), "body {} alone, force y", p);
-                prop_assert_eq!(tp.to_bits(), wt[p].to_bits(), "body {} alone, torque", p);
             }
         }
     }

@@ -218,19 +218,38 @@ impl<T: Real> CoupledWorld<T> {
         let fluid = lap(t0);
         let t0 = clock();
         let centers: Vec<Point<f64>> = bodies.iter().map(|b| b.center).collect();
-        let (forces, torques) = self.fluid.solid_forces_and_torques(&centers);
+        // The fluid's forces on the grains are reduced (serially, in share order) while the first DEM
+        // step's contact, bond and platen forces, which do not read them, are computed beside (rayon's
+        // join: the second thread no longer waits through the reduction). Timed steps keep the two apart so
+        // that each stage's time is its own. The same operations on the same values either way.
+        let (lattice, dem) = (&self.fluid, &mut self.dem);
+        let mut dem_forces = Duration::ZERO;
+        let (forces, torques) = if timed {
+            let reduced = lattice.solid_forces_and_torques(&centers);
+            let t1 = clock();
+            dem.contact_and_bond_forces();
+            dem_forces = lap(t1);
+            reduced
+        } else {
+            rayon::join(
+                || lattice.solid_forces_and_torques(&centers),
+                || dem.contact_and_bond_forces(),
+            )
+            .0
+        };
         let (force_scale, torque_scale) = (self.map.force_scale(), self.map.torque_scale());
         for (i, ((f, t), (af, at))) in forces.iter().zip(&torques).zip(&self.applied).enumerate() {
             self.dem.external_force[i] =
                 lbdem_kernels::math::vector(f[0] * force_scale + af[0], f[1] * force_scale + af[1]);
             self.dem.external_torque[i] = t * torque_scale + at;
         }
-        let coupling = lap(t0);
+        let coupling = lap(t0).saturating_sub(dem_forces);
         let t0 = clock();
-        for _ in 0..self.substeps {
+        self.dem.finish_step();
+        for _ in 1..self.substeps {
             self.dem.step();
         }
-        let dem = lap(t0);
+        let dem = lap(t0) + dem_forces;
         if let Some(t) = &mut self.timings {
             t.steps += 1;
             t.coverage += coverage;

@@ -7,8 +7,7 @@
 //! node's, and special and covered nodes are computed in a fixed order, so the result is bitwise the same for
 //! any number of threads or bands.
 use lbdem_kernels::coupling::{
-    body_cell_range, reduce_exchange, reduce_exchange_of, rigid_velocity, BodyShape, CoupledBody,
-    PreparedBody,
+    body_cell_range, reduce_exchange, rigid_velocity, BodyShape, CoupledBody, PreparedBody,
 };
 use lbdem_kernels::coverage::{ellipse_cell_grid, ellipse_grid_fractions, CellGrid};
 use lbdem_kernels::fluid::aa::{
@@ -31,7 +30,6 @@ use lbdem_kernels::Real;
 use rayon::prelude::*;
 use std::borrow::Cow;
 use std::sync::atomic::{AtomicU64, Ordering as AtomicOrdering};
-use std::sync::Mutex;
 
 pub use crate::engine::exec::Streaming;
 use crate::engine::exec::{
@@ -94,52 +92,6 @@ pub struct FluidLattice<T: Real> {
     aa_covered_special_found: u64,
     /// Identity of `special` ([`next_list_id`]), renewed whenever the list is.
     special_id: u64,
-    /// The shares grouped by body, for the force reduction in parallel over bodies.
-    owner_index: Mutex<OwnerIndex>,
-}
-
-/// The shares of a coverage grouped by owner (`order[offsets[p]..offsets[p + 1]]`: body p's share indices,
-/// increasing), for [`FluidLattice::solid_forces_and_torques`] in parallel over bodies, bitwise the serial
-/// reduction. Built for one coverage layout and body count; since building it costs about what one serial
-/// reduction does, it is built at the second reduction of a layout (a layout the re-mapping keeps for many
-/// steps: a remap tolerance, or bodies that keep their nodes), not at the first.
-#[derive(Default)]
-struct OwnerIndex {
-    /// (coverage layout, bodies) this index is for, if built.
-    built_for: Option<(u64, usize)>,
-    /// (coverage layout, bodies) of the last reduction.
-    last: Option<(u64, usize)>,
-    offsets: Vec<u32>,
-    order: Vec<u32>,
-    /// Reductions made with the index (for tests).
-    used: u64,
-}
-
-impl OwnerIndex {
-    /// Group the shares whose owner is below `bodies` by owner, in share order (a counting sort); shares of
-    /// other owners are left out, as the serial reduction ignores them.
-    fn build(&mut self, owners: &[u32], bodies: usize, key: (u64, usize)) {
-        self.offsets.clear();
-        self.offsets.resize(bodies + 1, 0);
-        for &o in owners {
-            if (o as usize) < bodies {
-                self.offsets[o as usize + 1] += 1;
-            }
-        }
-        for p in 0..bodies {
-            self.offsets[p + 1] += self.offsets[p];
-        }
-        self.order.clear();
-        self.order.resize(self.offsets[bodies] as usize, 0);
-        let mut next = self.offsets[..bodies].to_vec();
-        for (k, &o) in owners.iter().enumerate() {
-            if let Some(n) = next.get_mut(o as usize) {
-                self.order[*n as usize] = k as u32;
-                *n += 1;
-            }
-        }
-        self.built_for = Some(key);
-    }
 }
 
 /// Buffers kept between calls of [`FluidLattice::cover_with_bodies`]: the cells of each body, and per-node
@@ -1082,7 +1034,6 @@ impl<T: Real> FluidLattice<T> {
             aa_covered_special_key: None,
             aa_covered_special_found: 0,
             special_id: 0,
-            owner_index: Mutex::new(OwnerIndex::default()),
         };
         lattice.reclassify();
         lattice.fill_equilibrium(|_, _| (T::one(), [T::zero(); 2]));
@@ -1944,46 +1895,15 @@ impl<T: Real> FluidLattice<T> {
                 periodic[0].then_some(self.shape.nx as f64),
                 periodic[1].then_some(self.shape.ny as f64),
             ];
-            let key = (c.layout, centers.len());
-            let mut index = self
-                .owner_index
-                .lock()
-                .unwrap_or_else(std::sync::PoisonError::into_inner);
-            // The second reduction of a layout builds the index (the first may be the only one).
-            if c.layout != 0 && index.built_for != Some(key) && index.last == Some(key) {
-                index.build(&c.owners, centers.len(), key);
-            }
-            index.last = Some(key);
-            if index.built_for == Some(key) {
-                // In parallel over bodies, each body's shares in share order: the serial pass's sums.
-                let index = &mut *index;
-                index.used += 1;
-                let (offsets, order) = (&index.offsets, &index.order);
-                forces
-                    .par_iter_mut()
-                    .zip(torques.par_iter_mut())
-                    .enumerate()
-                    .for_each(|(p, (f, t))| {
-                        let shares = &order[offsets[p] as usize..offsets[p + 1] as usize];
-                        (*f, *t) = reduce_exchange_of(
-                            &c.share_nodes,
-                            &exchange,
-                            shares,
-                            centers[p],
-                            periods,
-                        );
-                    });
-            } else {
-                reduce_exchange(
-                    &c.share_nodes,
-                    &c.owners,
-                    &exchange,
-                    centers,
-                    periods,
-                    &mut forces,
-                    &mut torques,
-                );
-            }
+            reduce_exchange(
+                &c.share_nodes,
+                &c.owners,
+                &exchange,
+                centers,
+                periods,
+                &mut forces,
+                &mut torques,
+            );
         }
         (forces, torques)
     }
@@ -2818,23 +2738,17 @@ mod tests {
             );
             advance(&mut rng, &mut bodies, jump);
         }
-        // Both lattices step the same populations and forces above, bitwise: the incremental one with the
-        // covered special nodes kept from the last step while the coverage's lists stood, and its forces
-        // reduced in parallel over bodies once a layout had stood for a reduction; the other found them anew
-        // and reduced serially at every step (its coverage is rebuilt from nothing every step).
+        // Both lattices step the same populations above, bitwise: the incremental one with the covered special
+        // nodes kept from the last step while the coverage's lists stood, the other finding them anew at every
+        // step (its coverage is rebuilt from nothing every step).
         let found = incremental.aa_covered_special_found;
-        let used = incremental.owner_index.lock().unwrap().used;
         assert!(
             covered_special_steps > 60,
             "covered special nodes at {covered_special_steps} steps"
         );
         assert_eq!(scratch.aa_covered_special_found, 120);
-        assert_eq!(scratch.owner_index.lock().unwrap().used, 0);
         if jump <= 1.0 {
-            assert!(
-                found < 100 && used > 20,
-                "found anew {found}, parallel reductions {used}"
-            );
+            assert!(found < 100, "found anew at {found} of 120 steps");
         }
         // The comparison saw real coverage (about 30 bodies of ~50 cells each per step).
         assert!(shares > 120 * 300, "only {shares} shares in 120 steps");

@@ -775,8 +775,18 @@ impl<T: Real> DemWorld<T> {
         Ok(())
     }
 
-    /// Advance one step (see the module documentation for the order).
+    /// Advance one step (see the module documentation for the order): [`DemWorld::contact_and_bond_forces`],
+    /// then [`DemWorld::finish_step`].
     pub fn step(&mut self) {
+        self.contact_and_bond_forces();
+        self.finish_step();
+    }
+
+    /// The first part of [`DemWorld::step`]: broad phase, contact, bond and platen forces (and the breaks and
+    /// platen loads), which do not read the external forces, so that a coupled step can compute them while it
+    /// reduces the fluid's forces into the external ones. [`DemWorld::finish_step`] must follow before anything
+    /// else changes the world.
+    pub fn contact_and_bond_forces(&mut self) {
         let n = self.particles.len();
         let dt = self.dt;
         self.broad_phase();
@@ -884,6 +894,13 @@ impl<T: Real> DemWorld<T> {
                 pl.contacts = load.contacts;
             }
         }
+    }
+
+    /// The rest of [`DemWorld::step`] after [`DemWorld::contact_and_bond_forces`]: the external forces added,
+    /// the particles integrated, the platens moved.
+    pub fn finish_step(&mut self) {
+        let n = self.particles.len();
+        let dt = self.dt;
         for (f, e) in self.force.iter_mut().zip(&self.external_force) {
             *f += *e;
         }
