@@ -86,7 +86,7 @@ pub fn rotation<T: Real>(angle: AngVector<T>) -> Rotation<T> {
 /// The rotation whose cosine and sine are given (already computed, e.g. a placed shape's): [`rotation`] of θ is
 /// `rotation_from_cos_sin(cos θ, sin θ)` with `libm`'s cosine and sine.
 #[inline(always)]
-pub fn rotation_from_cos_sin<T: Real>(cos: T, sin: T) -> Rotation<T> {
+pub(crate) fn rotation_from_cos_sin<T: Real>(cos: T, sin: T) -> Rotation<T> {
     Unit::new_unchecked(Complex::new(cos, sin))
 }
 

@@ -343,7 +343,7 @@ pub fn bond_forces<T: Real>(
 
 /// [`bond_forces`] with every particle's placed shape given (`placed[k] = particles[k].placed()`, the pass over
 /// the particles the contact pass makes anyway): bitwise the same slots, without a sine or cosine of a
-/// particle's angle per point bond ([`Bond::force_placed`]). `placed` needs an entry per particle.
+/// particle's angle per point bond (`Bond::force_placed`). `placed` needs an entry per particle.
 pub fn bond_forces_placed<T: Real>(
     particles: &[Particle<T>],
     placed: &[Placed<T>],

@@ -143,7 +143,11 @@ impl<T: Real> PointBond<T> {
     /// cosine once per step instead of twice per bond. Bitwise the same: a rotation by θ is the unit complex
     /// number (cos θ, sin θ) with `libm`'s cosine and sine either way ([`crate::math::rotation`]).
     #[inline]
-    pub fn material_points_placed(&self, i: &Placed<T>, j: &Placed<T>) -> (Vector<T>, Vector<T>) {
+    pub(crate) fn material_points_placed(
+        &self,
+        i: &Placed<T>,
+        j: &Placed<T>,
+    ) -> (Vector<T>, Vector<T>) {
         let (ri, rj) = (
             rotation_from_cos_sin(i.cos, i.sin),
             rotation_from_cos_sin(j.cos, j.sin),
@@ -188,7 +192,7 @@ pub fn point_bond_force<T: Real>(
 
 /// [`point_bond_force`] with the particles' placed shapes given (`placed_i = i.placed()`,
 /// `placed_j = j.placed()`), computed once per particle by a pass over many bonds: bitwise the same.
-pub fn point_bond_force_placed<T: Real>(
+pub(crate) fn point_bond_force_placed<T: Real>(
     bond: &mut PointBond<T>,
     i: &Particle<T>,
     j: &Particle<T>,
@@ -444,7 +448,7 @@ impl<T: Real> Bond<T> {
     /// [`Bond::force`] with the particles' placed shapes (`Some((i.placed(), j.placed()))`, computed once per
     /// particle by a pass over many bonds; a point bond then takes no sine or cosine of the particles' angles):
     /// bitwise the same.
-    pub fn force_placed(
+    pub(crate) fn force_placed(
         &mut self,
         i: &Particle<T>,
         j: &Particle<T>,
