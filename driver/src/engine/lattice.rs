@@ -2515,6 +2515,14 @@ mod tests {
         b
     }
 
+    /// Whether two lattices hold bitwise the same populations.
+    fn same_populations<T: Real>(a: &FluidLattice<T>, b: &FluidLattice<T>) -> bool {
+        a.populations()
+            .iter()
+            .zip(b.populations().iter())
+            .all(|(x, y)| x.to_f64_exact().to_bits() == y.to_f64_exact().to_bits())
+    }
+
     /// Pressure sides west (ρ = 1.01) and east (ρ = 1), walls south and north, for the re-mapping tests.
     fn pressure_x<T: Real>() -> Boundaries<T> {
         Boundaries {
@@ -2718,12 +2726,10 @@ mod tests {
                 .all(|(a, b)| a.to_bits() == b.to_bits()));
             incremental.step();
             scratch.step();
-            let same = incremental
-                .populations()
-                .iter()
-                .zip(scratch.populations().iter())
-                .all(|(a, b)| a.to_f64_exact().to_bits() == b.to_f64_exact().to_bits());
-            assert!(same, "step {step}: populations differ");
+            assert!(
+                same_populations(&incremental, &scratch),
+                "step {step}: populations differ"
+            );
             covered_special_steps += usize::from(!incremental.aa_covered_special.is_empty());
             let centers: Vec<Point<f64>> = bodies.iter().map(|b| b.center).collect();
             let (fa, ta) = incremental.solid_forces_and_torques(&centers);
@@ -2926,13 +2932,8 @@ mod tests {
             lattice.step();
             if let Some(r) = restored.as_mut() {
                 r.step();
-                let same = r
-                    .populations()
-                    .iter()
-                    .zip(lattice.populations().iter())
-                    .all(|(a, b)| a.to_f64_exact().to_bits() == b.to_f64_exact().to_bits());
                 assert!(
-                    same,
+                    same_populations(r, &lattice),
                     "step {step}: the restored lattice's populations differ"
                 );
             }

@@ -330,15 +330,7 @@ pub fn bond_forces<T: Real>(
     dt: T,
     out: &mut [BondForce<T>],
 ) -> Result<(), AssemblyError> {
-    if out.len() < bonds.len() {
-        return Err(AssemblyError::BufferLength);
-    }
-    check_bonds(bonds, particles.len())?;
-    for (b, slot) in bonds.iter_mut().zip(out.iter_mut()) {
-        let [i, j] = b.pair;
-        *slot = b.force(&particles[i], &particles[j], dt);
-    }
-    Ok(())
+    bond_pass(particles, None, bonds, dt, out)
 }
 
 /// [`bond_forces`] with every particle's placed shape given (`placed[k] = particles[k].placed()`, the pass over
@@ -351,7 +343,22 @@ pub fn bond_forces_placed<T: Real>(
     dt: T,
     out: &mut [BondForce<T>],
 ) -> Result<(), AssemblyError> {
-    if out.len() < bonds.len() || placed.len() < particles.len() {
+    if placed.len() < particles.len() {
+        return Err(AssemblyError::BufferLength);
+    }
+    bond_pass(particles, Some(placed), bonds, dt, out)
+}
+
+/// The loop of [`bond_forces`] and [`bond_forces_placed`]: buffer and index checks, then each bond's force into
+/// its slot, from the placed shapes when given.
+fn bond_pass<T: Real>(
+    particles: &[Particle<T>],
+    placed: Option<&[Placed<T>]>,
+    bonds: &mut [Bond<T>],
+    dt: T,
+    out: &mut [BondForce<T>],
+) -> Result<(), AssemblyError> {
+    if out.len() < bonds.len() {
         return Err(AssemblyError::BufferLength);
     }
     check_bonds(bonds, particles.len())?;
@@ -360,7 +367,7 @@ pub fn bond_forces_placed<T: Real>(
         *slot = b.force_placed(
             &particles[i],
             &particles[j],
-            Some((&placed[i], &placed[j])),
+            placed.map(|p| (&p[i], &p[j])),
             dt,
         );
     }
