@@ -22,7 +22,7 @@ use lbdem_kernels::fluid::boundary::{
     zou_he, zou_he_corner, Boundaries, SideCondition, SideProfiles,
 };
 use lbdem_kernels::fluid::collide::{
-    bgk_collide, bgk_collide_forced, bgk_collide_slices, fluid_collide, psm_collide,
+    bgk_collide, bgk_collide_forced, bgk_collide_slices, fluid_collide, lane_class, psm_collide,
     psm_collide_links, psm_velocity, trt_collide, trt_collide_forced, Collision, CollisionError,
     OpenLinks, PsmParams, SolidOperator, SolidShare, Trt, Weighting, ALL_LINKS_OPEN,
 };
@@ -30,8 +30,9 @@ use lbdem_kernels::fluid::d2q9::{density, equilibrium, momentum, second_moment, 
 use lbdem_kernels::fluid::lattice::{LatticeShape, Side};
 use lbdem_kernels::fluid::step::{
     band_mut, classify_special_nodes, collide_covered_list, collide_covered_nodes,
-    collide_covered_row, gather_node, gathered_moments, nodes_in_rows, open_links, planes,
-    planes_mut, step_band, stream_periodic, CoveredNodes, Domain, FluidParams, FLUID, SOLID,
+    collide_planned_row, gather_node, gathered_moments, nodes_in_rows, open_links,
+    plan_covered_row, planes, planes_mut, step_band, stream_periodic, CoveredNodes, Domain,
+    FluidParams, FLUID, PLAN_GROUPS, SOLID,
 };
 use lbdem_kernels::Real;
 use lbdem_reference::analytic;
@@ -2031,12 +2032,13 @@ fn check_batched<T: Real>(seed: u64) -> Result<(), TestCaseError> {
     Ok(())
 }
 
-/// [`collide_covered_row`] (the in-place covered nodes of one AA pass row: contiguous runs of one batch kernel
-/// loaded and stored plane by plane, the rest queued) against node by node [`load_from_rows`],
+/// [`plan_covered_row`] and [`collide_planned_row`] (the in-place covered nodes of one AA pass row, grouped by
+/// kernel, gathered and scattered plane by plane in batches of eight) against node by node [`load_from_rows`],
 /// [`psm_collide_links`], [`store_in_rows`], in precision `T`, either AA step: the same bits for every slot of
 /// the row and every exchange entry; special nodes (`own` false) and their entries untouched. Half the cases
-/// give long stretches of nodes one batch kernel (fully covered, or one partial fraction) in consecutive
-/// columns, so that the contiguous path runs, with gaps, edge columns and skipped nodes between them.
+/// give long stretches of nodes of one batch kernel (fully covered, or one partial fraction) in consecutive
+/// columns, with gaps, edge columns (where the scatter step wraps) and skipped nodes between them. Also: the
+/// plan lists every node with `own(k)` once, grouped as [`PLAN_GROUPS`] says, each group increasing.
 fn check_row<T: Real>(seed: u64) -> Result<(), TestCaseError> {
     let (p, _, offsets, mut shares, links) = random_covered_list(seed);
     let mut rng = SplitMix(seed ^ 0x5EED);
@@ -2133,17 +2135,43 @@ fn check_row<T: Real>(seed: u64) -> Result<(), TestCaseError> {
             store_in_rows(&mut rows, step, 0, columns[k] as usize, 0, &f);
         }
     }
+    // The plan.
+    let mut plan = vec![u32::MAX; n];
+    let counts = plan_covered_row(&params, |k| own[k], &offsets, &shares, &mut plan);
+    let planned: usize = counts.iter().map(|&c| c as usize).sum();
+    prop_assert_eq!(planned, own.iter().filter(|&&o| o).count());
+    let mut listed = plan[..planned].to_vec();
+    let mut at = 0;
+    for (group, &count) in PLAN_GROUPS.iter().zip(&counts) {
+        let nodes = &plan[at..at + count as usize];
+        at += count as usize;
+        prop_assert!(
+            nodes.windows(2).all(|w| w[0] < w[1]),
+            "each group increasing"
+        );
+        for &k in nodes {
+            let (a, b) = (
+                offsets[k as usize] as usize,
+                offsets[k as usize + 1] as usize,
+            );
+            prop_assert_eq!(lane_class(&params, &shares[a..b]), *group);
+        }
+    }
+    listed.sort_unstable();
+    let own_nodes: Vec<u32> = (0..n as u32).filter(|&k| own[k as usize]).collect();
+    prop_assert_eq!(listed, own_nodes);
     // The row pass.
     let mut got = planes.clone();
     let mut got_ex = vec![sentinel; total];
     {
         let mut rows = as_row(&mut got);
-        collide_covered_row(
+        collide_planned_row(
             &params,
             &mut rows[0],
             step,
             &columns,
-            |k| own[k],
+            &plan[..planned],
+            counts,
             &offsets,
             &shares,
             &links,
@@ -2173,7 +2201,8 @@ fn check_row<T: Real>(seed: u64) -> Result<(), TestCaseError> {
 proptest! {
     #![proptest_config(ProptestConfig::with_cases(512))]
 
-    /// The covered nodes of an in-place pass row collided by `collide_covered_row` are bitwise the node kernel
+    /// The covered nodes of an in-place pass row planned by `plan_covered_row` and collided by
+    /// `collide_planned_row` are bitwise the node kernel
     /// run node by node in place, for every operator, BGK and TRT, with and without force, both weightings,
     /// both AA steps, in f64 and f32 (exact claim: the same functions on the same values).
     #[test]

@@ -21,9 +21,10 @@ use lbdem_kernels::fluid::collide::{
 use lbdem_kernels::fluid::d2q9::{equilibrium, OPPOSITE, Q};
 use lbdem_kernels::fluid::lattice::{LatticeShape, Side};
 use lbdem_kernels::fluid::step::{
-    classify_special_nodes, collide_covered_nodes, collide_covered_row, covered_node_value,
-    fix_special_nodes, gather_node_in, gathered_moments_in, nodes_in_rows, open_links, planes_mut,
-    special_node_value, CoveredNodes, Domain, FluidParams, FLUID, SOLID,
+    classify_special_nodes, collide_covered_nodes, collide_planned_row, covered_node_value,
+    fix_special_nodes, gather_node_in, gathered_moments_in, nodes_in_rows, open_links,
+    plan_covered_row, planes_mut, special_node_value, CoveredNodes, Domain, FluidParams, FLUID,
+    PLAN_GROUPS, SOLID,
 };
 use lbdem_kernels::math::{Point, Vector};
 use lbdem_kernels::Real;
@@ -92,6 +93,24 @@ pub struct FluidLattice<T: Real> {
     aa_covered_special_found: u64,
     /// Identity of `special` ([`next_list_id`]), renewed whenever the list is.
     special_id: u64,
+    /// In-place scheme: each band's covered rows planned for `collide_planned_row`, kept while the plans'
+    /// key stands.
+    covered_plans: Vec<CoveredPlan>,
+    /// How many band plans were made (for tests).
+    covered_plans_made: u64,
+}
+
+/// What a band's covered-row plans depend on: the coverage's lists and fractions, the special-node list (the
+/// nodes left out), the solid operator (the kernel of each node) and the band's rows.
+type PlanKey = (u64, u64, u64, SolidOperator, usize);
+
+/// The covered nodes of one band of rows planned row by row ([`plan_covered_row`]): the rows' plans one after
+/// the other in `nodes` (indices into each row's covered nodes), each row's group sizes in `counts`.
+#[derive(Default)]
+struct CoveredPlan {
+    key: Option<PlanKey>,
+    counts: Vec<[u32; PLAN_GROUPS.len()]>,
+    nodes: Vec<u32>,
 }
 
 /// Buffers kept between calls of [`FluidLattice::cover_with_bodies`]: the cells of each body, and per-node
@@ -887,6 +906,10 @@ struct Coverage<T> {
     /// ([`next_list_id`]; renewed whenever they are built, 0 until then for a coverage read from a checkpoint).
     #[serde(skip)]
     layout: u64,
+    /// Identity of the fractions (renewed with `layout` and whenever the shares' fractions are rewritten; 0
+    /// until the first step for a coverage read from a checkpoint): what the covered rows' plans are kept for.
+    #[serde(skip)]
+    fractions: u64,
     nodes: Vec<u32>,
     offsets: Vec<u32>,
     shares: Vec<SolidShare<T>>,
@@ -1034,6 +1057,8 @@ impl<T: Real> FluidLattice<T> {
             aa_covered_special_key: None,
             aa_covered_special_found: 0,
             special_id: 0,
+            covered_plans: Vec::new(),
+            covered_plans_made: 0,
         };
         lattice.reclassify();
         lattice.fill_equilibrium(|_, _| (T::one(), [T::zero(); 2]));
@@ -1457,6 +1482,7 @@ impl<T: Real> FluidLattice<T> {
         let total: usize = plans.iter().map(|p| p.shares).sum();
         let mut cov = coverage.unwrap_or_else(|| Coverage {
             layout: 0,
+            fractions: 0,
             nodes: Vec::new(),
             offsets: Vec::new(),
             shares: Vec::new(),
@@ -1468,6 +1494,7 @@ impl<T: Real> FluidLattice<T> {
         });
         cov.weighting = weighting;
         cov.layout = next_list_id();
+        cov.fractions = next_list_id();
         scratch.src.resize(total, 0);
         // Every entry below is overwritten by its band.
         let zero = SolidShare {
@@ -1567,6 +1594,7 @@ impl<T: Real> FluidLattice<T> {
                 });
         } else {
             Self::rewrite_shares(cov, cells, &scratch.src, bodies);
+            cov.fractions = next_list_id();
         }
         if lambda {
             let cov = &*cov;
@@ -1621,6 +1649,7 @@ impl<T: Real> FluidLattice<T> {
         let s = self.shape;
         let mut cov = Coverage {
             layout: next_list_id(),
+            fractions: next_list_id(),
             nodes: Vec::new(),
             offsets: vec![0],
             shares: Vec::new(),
@@ -1952,7 +1981,19 @@ impl<T: Real> FluidLattice<T> {
             if c.layout == 0 {
                 c.layout = next_list_id();
             }
+            if c.fractions == 0 {
+                c.fractions = next_list_id();
+            }
             (c.layout, self.special_id)
+        });
+        let plan_key: Option<PlanKey> = self.coverage.as_ref().map(|c| {
+            (
+                c.layout,
+                c.fractions,
+                self.special_id,
+                self.solid_operator,
+                band_rows,
+            )
         });
         let psm = self.coverage.as_ref().map(|c| PsmParams {
             tau: params.tau,
@@ -2036,6 +2077,8 @@ impl<T: Real> FluidLattice<T> {
         }
         // The covered nodes and their exchange entries, split along the bands of rows.
         let bands = shape.ny.div_ceil(band_rows);
+        let mut plans = std::mem::take(&mut self.covered_plans);
+        plans.resize_with(bands, CoveredPlan::default);
         let mut work: Vec<CoveredBand<'_, T>> = Vec::with_capacity(bands);
         {
             let mut ex_rest = exchange;
@@ -2067,22 +2110,51 @@ impl<T: Real> FluidLattice<T> {
                     })
                 })
                 .collect();
-            rows.par_chunks_mut(band_rows)
+            let made = rows
+                .par_chunks_mut(band_rows)
                 .zip(work.par_iter_mut())
+                .zip(plans.par_iter_mut())
                 .enumerate()
-                .for_each(|(b, (band, (lo, hi, ex)))| {
+                .map(|(b, ((band, (lo, hi, ex)), plan))| {
                     let y0 = b * band_rows;
                     let own = |k: usize| !mask[covered[k] as usize];
                     let (lo, hi) = (*lo, *hi);
                     let first = offsets[lo] as usize;
-                    // Row by row: the bulk pass over the row leaving its covered nodes that are not special as
-                    // they were (`keep`), then those nodes gathered from the row the pass has just brought into
-                    // cache, collided with the partially-saturated operator and stored in place (each such node
+                    // The band's rows planned anew when what the plans depend on changed (at every re-mapping
+                    // that moves a fraction; between re-mappings under a remap tolerance they are reused).
+                    let fresh = psm.is_some() && plan.key != plan_key;
+                    if let (true, Some(psm)) = (fresh, &psm) {
+                        plan.counts.clear();
+                        plan.nodes.clear();
+                        let mut k0 = lo;
+                        for r in 0..band.len() {
+                            let row_end = ((y0 + r + 1) * nx) as u32;
+                            let k1 = k0 + covered[k0..hi].partition_point(|&n| n < row_end);
+                            let at = plan.nodes.len();
+                            plan.nodes.resize(at + (k1 - k0), 0);
+                            let counts = plan_covered_row(
+                                psm,
+                                |j| own(k0 + j),
+                                &offsets[k0..=k1],
+                                shares,
+                                &mut plan.nodes[at..],
+                            );
+                            plan.nodes
+                                .truncate(at + counts.iter().map(|&c| c as usize).sum::<usize>());
+                            plan.counts.push(counts);
+                            k0 = k1;
+                        }
+                        plan.key = plan_key;
+                    }
+                    // Row by row: the bulk pass over the row leaving its planned covered nodes as they were
+                    // (`keep`), then those nodes gathered from the row the pass has just brought into cache,
+                    // collided with the partially-saturated operator and stored in place (each such node
                     // reads and writes only places of its own).
                     let mut keep = vec![false; nx];
                     // Columns of the row's covered nodes.
                     let mut columns: Vec<u32> = Vec::with_capacity(nx);
                     let mut k0 = lo;
+                    let mut at = 0;
                     for r in 0..band.len() {
                         let y = y0 + r;
                         let row_end = ((y + 1) * nx) as u32;
@@ -2093,26 +2165,30 @@ impl<T: Real> FluidLattice<T> {
                         let row = &mut band[r..r + 1];
                         match &psm {
                             Some(psm) if k1 > k0 => {
-                                for k in k0..k1 {
-                                    keep[covered[k] as usize - y * nx] = own(k);
-                                }
-                                aa_bulk_keeping_exec(simd, row, &keep, kind, &params, &collision);
-                                let ex = &mut ex[offsets[k0] as usize - first..];
+                                let counts = plan.counts[r];
+                                let len: usize = counts.iter().map(|&c| c as usize).sum();
+                                let planned = &plan.nodes[at..at + len];
+                                at += len;
                                 columns.clear();
                                 columns
                                     .extend(covered[k0..k1].iter().map(|&n| n - (y * nx) as u32));
                                 let columns = &columns[..];
+                                for &j in planned {
+                                    keep[columns[j as usize] as usize] = true;
+                                }
+                                aa_bulk_keeping_exec(simd, row, &keep, kind, &params, &collision);
+                                let ex = &mut ex[offsets[k0] as usize - first..];
                                 with_simd(
                                     simd,
                                     #[inline(always)]
                                     || {
-                                        collide_covered_row(
+                                        collide_planned_row(
                                             psm,
                                             &mut row[0],
                                             kind,
                                             columns,
-                                            #[inline(always)]
-                                            |j| own(k0 + j),
+                                            planned,
+                                            counts,
                                             &offsets[k0..=k1],
                                             shares,
                                             &links[k0..k1],
@@ -2120,15 +2196,18 @@ impl<T: Real> FluidLattice<T> {
                                         )
                                     },
                                 );
-                                for k in k0..k1 {
-                                    keep[covered[k] as usize - y * nx] = false;
+                                for &j in planned {
+                                    keep[columns[j as usize] as usize] = false;
                                 }
                             }
                             _ => aa_bulk_exec(simd, row, kind, &params, &collision),
                         }
                         k0 = k1;
                     }
-                });
+                    u64::from(fresh)
+                })
+                .sum::<u64>();
+            self.covered_plans_made += made;
         }
         drop(work);
         // Phase 3: special nodes, then the covered ones among them (whose values win, as in the two-lattice
@@ -2162,6 +2241,7 @@ impl<T: Real> FluidLattice<T> {
         self.aa_special = special_vals;
         self.aa_covered = covered_vals;
         self.aa_covered_special = covered_special;
+        self.covered_plans = plans;
     }
 
     /// One step of the two-lattice scheme: bulk pass, special nodes and covered nodes per band of rows, from the
@@ -2856,8 +2936,8 @@ mod tests {
     /// With a remap tolerance the coverage is, at every call, bitwise the reference coverage of the geometry
     /// the bodies were last mapped at, with the bodies' current rigid velocities; that geometry lies within the
     /// tolerance of the bodies (any point of them), the bodies are mapped again as soon as one would not, a
-    /// lattice restored from a checkpoint taken between two re-mappings continues bitwise as the saved one, and
-    /// a tolerance of zero re-maps at every call.
+    /// lattice restored from a checkpoint taken between two re-mappings continues bitwise as the saved one, the
+    /// covered rows' plans are made anew only after a re-mapping, and a tolerance of zero re-maps at every call.
     fn remap_tolerance_case<T>(bc: Boundaries<T>, seed: u64, operator: SolidOperator)
     where
         T: Real + serde::Serialize + serde::de::DeserializeOwned,
@@ -2942,6 +3022,14 @@ mod tests {
         assert!(
             kept >= 50 && mapped_again >= 5,
             "kept {kept}, mapped again {mapped_again} of 149 calls"
+        );
+        // The covered rows' plans are made anew after a re-mapping (and at the first step), not at the steps
+        // between: at most one plan per band and re-mapping.
+        let bands = ny.div_ceil(lattice.band_rows) as u64;
+        let made = lattice.covered_plans_made;
+        assert!(
+            made >= bands && made <= (mapped_again as u64 + 1) * bands,
+            "{made} band plans made over 150 steps ({bands} bands, {mapped_again} re-mappings)"
         );
         assert!(lattice.populations().iter().all(|v| v.is_finite()));
         // Zero tolerance: every body is mapped where it is at every call.

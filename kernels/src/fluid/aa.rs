@@ -338,7 +338,7 @@ fn local_row_with<T: Real, C: Fn(&mut [T; Q]), K: Fn(usize) -> bool>(
 
 /// Column of plane p read and written by node x in a scatter step: x − c_p,x, wrapped.
 #[inline(always)]
-fn scatter_column(p: usize, x: usize, nx: usize) -> usize {
+pub(super) fn scatter_column(p: usize, x: usize, nx: usize) -> usize {
     let cx = VELOCITIES[p][0];
     if cx > 0 {
         if x == 0 {

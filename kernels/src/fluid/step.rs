@@ -19,7 +19,9 @@
 //!
 //! Each pass reads only `src` and writes only the band of `dst`, so bands are independent: splitting the
 //! lattice into bands for threads gives bitwise the same result for any number of threads.
-use super::aa::{load_from_rows, load_post_collision, store_in_rows, AaStep, Layout};
+use super::aa::{
+    load_from_rows, load_post_collision, scatter_column, store_in_rows, AaStep, Layout,
+};
 use super::boundary::{zou_he, zou_he_corner, Boundaries, SideCondition, SideProfiles};
 use super::collide::{
     bgk_collide, bgk_collide_forced, fluid_collide, lane_class, psm_collide_lanes,
@@ -707,151 +709,196 @@ pub fn collide_covered_list<T: Real, S: ?Sized>(
     }
 }
 
-/// [`collide_covered_list`] for the covered nodes of one pass row of an in-place (AA) step, in place: node k
-/// (0 ≤ k < `columns.len()`) sits in column `columns[k]` (increasing) of the row `row` (the nine plane rows
-/// [`super::aa::plane_row`] hands out for it, after a bulk pass that left these nodes as they were:
-/// [`super::aa::aa_bulk_rows_keeping`]), has the shares `shares[offsets[k] .. offsets[k + 1]]`, open links
-/// `links[k]`, and is left alone when `own(k)` is false (a special node, computed elsewhere). Every node gets
-/// bitwise what [`psm_collide_links`] gives it, stored where [`super::aa::store_in_rows`] stores it.
+/// The groups of a covered-row plan ([`plan_covered_row`]), in the order a plan lists them: the nodes of each
+/// batch kernel ([`lane_class`]: ΩΛ partly covered, ΩΛ fully covered, the other operators), then the nodes that
+/// take the node kernel ([`psm_collide_links`]: several shares, or a fraction that is not positive).
+pub const PLAN_GROUPS: [Option<LaneClass>; 4] = [
+    Some(LaneClass::LambdaPartial),
+    Some(LaneClass::LambdaFull),
+    Some(LaneClass::Operator),
+    None,
+];
+
+/// The group of [`PLAN_GROUPS`] a node covered by `shares` belongs to.
+#[inline(always)]
+fn plan_group<T: Real>(params: &PsmParams<T>, shares: &[SolidShare<T>]) -> usize {
+    match lane_class(params, shares) {
+        Some(LaneClass::LambdaPartial) => 0,
+        Some(LaneClass::LambdaFull) => 1,
+        Some(LaneClass::Operator) => 2,
+        None => 3,
+    }
+}
+
+/// Plan the covered nodes of one pass row for [`collide_planned_row`]: node k (0 ≤ k < `offsets.len()` − 1) has
+/// the shares `shares[offsets[k] .. offsets[k + 1]]` and is left out when `own(k)` is false (a special node,
+/// computed elsewhere). Writes the indices k of the other nodes into `plan` grouped as [`PLAN_GROUPS`] lists
+/// them, each group in increasing k, and returns the size of each group. `plan` needs room for every node of
+/// the row (`offsets.len()` − 1 entries); indices that do not fit are not written, but still counted.
 ///
-/// Runs of [`PSM_LANES`] nodes in consecutive interior columns (1 ≤ x ≤ nx − 2) that take the same batch
-/// kernel ([`lane_class`]) — the inside of a grain — are loaded into the lanes and stored back with one
-/// contiguous access per plane instead of a gather and a scatter per node; the other nodes go through the
-/// queues of [`collide_covered_list`].
+/// A plan depends only on the fractions (through [`lane_class`]), the operator and `own`: a caller may keep it
+/// while those stand (between re-mappings, the fluid step's plans are reused at every step).
+pub fn plan_covered_row<T: Real>(
+    params: &PsmParams<T>,
+    own: impl Fn(usize) -> bool,
+    offsets: &[u32],
+    shares: &[SolidShare<T>],
+    plan: &mut [u32],
+) -> [u32; PLAN_GROUPS.len()] {
+    let n = offsets.len().saturating_sub(1);
+    let group = |k: usize| {
+        own(k).then(|| {
+            plan_group(
+                params,
+                &shares[offsets[k] as usize..offsets[k + 1] as usize],
+            )
+        })
+    };
+    let mut counts = [0u32; PLAN_GROUPS.len()];
+    for k in 0..n {
+        if let Some(g) = group(k) {
+            counts[g] += 1;
+        }
+    }
+    let mut next = [0usize; PLAN_GROUPS.len()];
+    for g in 1..next.len() {
+        next[g] = next[g - 1] + counts[g - 1] as usize;
+    }
+    for k in 0..n {
+        if let Some(g) = group(k) {
+            if let Some(slot) = plan.get_mut(next[g]) {
+                *slot = k as u32;
+            }
+            next[g] += 1;
+        }
+    }
+    counts
+}
+
+/// The covered nodes of one pass row of an in-place (AA) step collided in place, from a plan
+/// ([`plan_covered_row`], its group sizes `counts`): node k sits in column `columns[k]` of the row `row` (the
+/// nine plane rows [`super::aa::plane_row`] hands out for it, after a bulk pass that left these nodes as they
+/// were: [`super::aa::aa_bulk_rows_keeping`]), has the shares `shares[offsets[k] .. offsets[k + 1]]` and open
+/// links `links[k]`; `exchange` starts at the row's first share (`offsets[0]`). Every planned node gets bitwise
+/// what [`psm_collide_links`] gives it, stored where [`super::aa::store_in_rows`] stores it; nodes the plan
+/// leaves out are not touched.
+///
+/// The nodes of each batch kernel are taken [`PSM_LANES`] at a time in the plan's order, their populations
+/// gathered plane by plane (one loop over the lanes per plane, no branch on the node), collided by
+/// [`psm_collide_lanes`] and scattered back plane by plane; a last batch that is not full repeats its first
+/// node in the unused lanes, whose results are dropped. Each node reads and writes only places of its own, so
+/// the order does not change any bit. The nodes of the last group take [`psm_collide_links`] one by one.
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
-pub fn collide_covered_row<T: Real>(
+pub fn collide_planned_row<T: Real>(
     params: &PsmParams<T>,
     row: &mut [&mut [T]; Q],
     step: AaStep,
     columns: &[u32],
-    own: impl Fn(usize) -> bool,
+    plan: &[u32],
+    counts: [u32; PLAN_GROUPS.len()],
     offsets: &[u32],
     shares: &[SolidShare<T>],
     links: &[OpenLinks],
     exchange: &mut [[T; 2]],
 ) {
-    let n = columns
-        .len()
-        .min(links.len())
-        .min(offsets.len().saturating_sub(1));
-    let nx = row[0].len();
     let first = offsets.first().copied().unwrap_or(0) as usize;
-    // What node k takes, decided once per node: left alone (special), the node kernel, or a batch kernel
-    // ([`lane_class`]; `true` in an interior column, where it can join a contiguous run).
-    #[derive(Clone, Copy, PartialEq, Eq)]
-    enum Take {
-        Skip,
-        Node,
-        Lane(LaneClass, bool),
-    }
-    #[inline(always)]
-    fn take<T: Real>(
-        params: &PsmParams<T>,
-        columns: &[u32],
-        own: &impl Fn(usize) -> bool,
-        offsets: &[u32],
-        shares: &[SolidShare<T>],
-        nx: usize,
-        k: usize,
-    ) -> Take {
-        if !own(k) {
-            return Take::Skip;
-        }
-        let (a, b) = (offsets[k] as usize, offsets[k + 1] as usize);
-        match lane_class(params, &shares[a..b]) {
-            None => Take::Node,
-            Some(c) => {
-                let x = columns[k] as usize;
-                Take::Lane(c, x != 0 && x + 2 <= nx)
-            }
-        }
-    }
-    let take = |k: usize| take(params, columns, &own, offsets, shares, nx, k);
-    let mut queues: [LaneQueue<T>; 3] = core::array::from_fn(|_| LaneQueue {
-        lanes: PsmLanes::default(),
-        nodes: [0; PSM_LANES],
-        len: 0,
-    });
-    let mut run = PsmLanes::<T>::default();
+    let mut lanes = PsmLanes::<T>::default();
     let rows = core::slice::from_mut(row);
     let mut store = RowStore { columns, step };
-    let mut k = 0;
-    // The take of node k when the previous run's scan already decided it (a run that ends on a column gap or
-    // at the row's end leaves it to be decided afresh).
-    let mut next = None;
-    while k < n {
-        let t = next.take().unwrap_or_else(|| take(k));
-        // The run of nodes from k on in consecutive interior columns that take node k's batch kernel.
-        let mut m = 1;
-        if let Take::Lane(_, true) = t {
-            while k + m < n && columns[k + m] == columns[k] + m as u32 {
-                let u = take(k + m);
-                if u != t {
-                    next = Some(u);
-                    break;
-                }
-                m += 1;
-            }
-        }
-        let whole = match t {
-            Take::Lane(_, true) => m - m % PSM_LANES,
-            _ => 0,
-        };
-        if let Take::Lane(c, true) = t {
-            for chunk in (k..k + whole).step_by(PSM_LANES) {
-                let x0 = columns[chunk] as usize;
-                for (l, share) in run.share.iter_mut().enumerate() {
-                    *share = shares[offsets[chunk + l] as usize];
-                    run.open[l] = links[chunk + l];
-                }
-                load_lanes(&rows[0], step, x0, &mut run.f);
-                psm_collide_lanes(&mut run, PSM_LANES, params, c);
-                store_lanes(&mut rows[0], step, x0, &run.f);
-                for l in 0..PSM_LANES {
-                    exchange[offsets[chunk + l] as usize - first] = run.exchange[l];
+    let mut start = 0;
+    for (group, count) in PLAN_GROUPS.iter().zip(counts) {
+        let end = (start + count as usize).min(plan.len());
+        let nodes = &plan[start..end];
+        start = end;
+        match *group {
+            Some(class) => {
+                for chunk in nodes.chunks(PSM_LANES) {
+                    let k: [usize; PSM_LANES] = core::array::from_fn(|l| {
+                        chunk.get(l).copied().unwrap_or(chunk[0]) as usize
+                    });
+                    let x: [usize; PSM_LANES] = core::array::from_fn(|l| columns[k[l]] as usize);
+                    gather_lanes(&rows[0], step, &x, &mut lanes.f);
+                    for l in 0..PSM_LANES {
+                        lanes.share[l] = shares[offsets[k[l]] as usize];
+                        lanes.open[l] = links[k[l]];
+                    }
+                    psm_collide_lanes(&mut lanes, PSM_LANES, params, class);
+                    scatter_lanes(&mut rows[0], step, &x[..chunk.len()], &lanes.f);
+                    for l in 0..chunk.len() {
+                        exchange[offsets[k[l]] as usize - first] = lanes.exchange[l];
+                    }
                 }
             }
-        }
-        // The rest of the run (or node k alone): its batch kernel's queue, or the node kernel.
-        for (j, &x) in columns.iter().enumerate().take(k + m).skip(k + whole) {
-            match t {
-                Take::Skip => {}
-                Take::Node => {
-                    let f = load_from_rows(rows, step, 0, x as usize, 0);
+            None => {
+                for &k in nodes {
+                    let k = k as usize;
+                    let f = load_from_rows(rows, step, 0, columns[k] as usize, 0);
                     collide_alone(
-                        j, f, params, offsets, shares, links, exchange, rows, &mut store,
-                    );
-                }
-                Take::Lane(c, _) => {
-                    let f = load_from_rows(rows, step, 0, x as usize, 0);
-                    push_lane(
-                        &mut queues,
-                        c,
-                        j,
-                        f,
-                        params,
-                        offsets,
-                        shares,
-                        links,
-                        exchange,
-                        rows,
-                        &mut store,
+                        k, f, params, offsets, shares, links, exchange, rows, &mut store,
                     );
                 }
             }
         }
-        k += m;
     }
-    for (q, class) in queues.iter_mut().zip(QUEUE_CLASSES) {
-        if q.len > 0 {
-            q.flush(class, params, offsets, exchange, rows, &mut store);
+}
+
+/// The lanes of the nodes in columns `x` of a pass row, plane by plane: `f[p][l]` where
+/// [`super::aa::load_from_rows`] reads population p of node `x[l]`.
+#[inline(always)]
+fn gather_lanes<T: Real>(
+    row: &[&mut [T]; Q],
+    step: AaStep,
+    x: &[usize; PSM_LANES],
+    f: &mut [[T; PSM_LANES]; Q],
+) {
+    let nx = row[0].len();
+    for (p, fp) in f.iter_mut().enumerate() {
+        match step {
+            AaStep::Local => {
+                let plane = &row[OPPOSITE[p]];
+                for (v, &x) in fp.iter_mut().zip(x) {
+                    *v = plane[x];
+                }
+            }
+            AaStep::Scatter => {
+                let plane = &row[p];
+                for (v, &x) in fp.iter_mut().zip(x) {
+                    *v = plane[scatter_column(p, x, nx)];
+                }
+            }
+        }
+    }
+}
+
+/// Lanes gathered by [`gather_lanes`] stored back, plane by plane, where [`super::aa::store_in_rows`] stores
+/// each node: the first `x.len()` lanes only.
+#[inline(always)]
+fn scatter_lanes<T: Real>(
+    row: &mut [&mut [T]; Q],
+    step: AaStep,
+    x: &[usize],
+    f: &[[T; PSM_LANES]; Q],
+) {
+    let nx = row[0].len();
+    for (p, plane) in row.iter_mut().enumerate() {
+        match step {
+            AaStep::Local => {
+                for (&v, &x) in f[p].iter().zip(x) {
+                    plane[x] = v;
+                }
+            }
+            AaStep::Scatter => {
+                for (&v, &x) in f[OPPOSITE[p]].iter().zip(x) {
+                    plane[scatter_column(p, x, nx)] = v;
+                }
+            }
         }
     }
 }
 
 /// Where the post-collision populations of a batched node go ([`push_node`], [`LaneQueue::flush`]): a closure
-/// `(state, k, f)`, or the in-place rows of [`collide_covered_row`]. A trait with an `#[inline(always)]` method
+/// `(state, k, f)`, or the in-place row of [`collide_planned_row`]. A trait with an `#[inline(always)]` method
 /// rather than a closure, which the compiler left out of line (a call per node).
 trait NodeStore<T, S: ?Sized> {
     fn put(&mut self, state: &mut S, k: usize, f: [T; Q]);
@@ -864,7 +911,7 @@ impl<T, S: ?Sized, F: FnMut(&mut S, usize, [T; Q])> NodeStore<T, S> for F {
     }
 }
 
-/// [`collide_covered_row`]'s store: node k at column `columns[k]` of the single pass row.
+/// [`collide_planned_row`]'s store: node k at column `columns[k]` of the single pass row.
 struct RowStore<'a> {
     columns: &'a [u32],
     step: AaStep,
@@ -974,36 +1021,6 @@ fn push_lane<T: Real, S: ?Sized>(
     q.len += 1;
     if q.len == PSM_LANES {
         q.flush(class, params, offsets, exchange, state, store);
-    }
-}
-
-/// The lanes of [`PSM_LANES`] nodes in the consecutive interior columns x0, x0 + 1, … of a pass row, loaded as
-/// [`super::aa::load_from_rows`] gathers each: `f[p][l]` from plane row p̄ at x0 + l (local step) or plane row p
-/// at x0 + l − c_p,x (scatter step), one contiguous slice per plane.
-#[inline(always)]
-fn load_lanes<T: Real>(row: &[&mut [T]; Q], step: AaStep, x0: usize, f: &mut [[T; PSM_LANES]; Q]) {
-    for (p, fp) in f.iter_mut().enumerate() {
-        let (plane, start) = match step {
-            AaStep::Local => (OPPOSITE[p], x0),
-            AaStep::Scatter => (p, (x0 as isize - VELOCITIES[p][0] as isize) as usize),
-        };
-        fp.copy_from_slice(&row[plane][start..start + PSM_LANES]);
-    }
-}
-
-/// Store lanes loaded by [`load_lanes`] back where [`super::aa::store_in_rows`] stores each node: `f[p][l]`
-/// into plane row p at x0 + l (local step), `f[p̄][l]` into plane row p at x0 + l − c_p,x (scatter step).
-#[inline(always)]
-fn store_lanes<T: Real>(row: &mut [&mut [T]; Q], step: AaStep, x0: usize, f: &[[T; PSM_LANES]; Q]) {
-    for (p, plane) in row.iter_mut().enumerate() {
-        let (src, start) = match step {
-            AaStep::Local => (p, x0),
-            AaStep::Scatter => (
-                OPPOSITE[p],
-                (x0 as isize - VELOCITIES[p][0] as isize) as usize,
-            ),
-        };
-        plane[start..start + PSM_LANES].copy_from_slice(&f[src]);
     }
 }
 
