@@ -179,6 +179,47 @@ fn bonded_world() -> DemWorld<f64> {
     p.world
 }
 
+/// The pair pass's hints (a separating direction kept per pair, which culls ellipse pairs before the
+/// closest-approach search) are not saved: a bonded ellipse packing under a moving platen, read back from a
+/// checkpoint without them, continues bitwise as the world that kept them, and the hints did cull pairs.
+#[test]
+fn ellipse_world_resumes_bitwise_without_its_separation_hints() {
+    use lbdem::engine::dem::{generate_packing, PackingSpec};
+    let mut spec = PackingSpec::dissertation(1.2, 1.2, 0.5, 3);
+    spec.max_servo_steps = 2000;
+    let bonds = Some(BondSpec::Point {
+        stiffness: 1e5,
+        strength: 700.0,
+    });
+    let mut p = generate_packing(&spec, bonds).unwrap();
+    let b = p.sample_box;
+    p.world.platens[b.top].control = PlatenControl::Speed(0.5);
+    let mut a = p.world;
+    let mut active = 0;
+    for _ in 0..100 {
+        a.step();
+        active = active.max(a.active_contacts());
+    }
+    let before = a.hint_culls();
+    assert!(active > 10, "the check needs ellipse contacts ({active})");
+    let bytes = Checkpoint::to_bytes(SCENE, "test", 7, &a);
+    let (_, mut r): (_, DemWorld<f64>) = Checkpoint::from_bytes(&bytes, SCENE, "test").unwrap();
+    assert_eq!(r.hint_culls(), 0, "hints are not saved");
+    for _ in 0..200 {
+        a.step();
+        r.step();
+    }
+    // The hints carried from before the checkpoint culled pairs in the first step after it, where the
+    // restored world had none yet.
+    assert!(a.hint_culls() > before, "no pair culled by a hint");
+    assert!(r.hint_culls() > 0);
+    assert_eq!(
+        Checkpoint::to_bytes(SCENE, "test", 0, &a),
+        Checkpoint::to_bytes(SCENE, "test", 0, &r),
+        "continued states differ"
+    );
+}
+
 #[test]
 fn dem_world_resumes_bitwise_with_contacts_bonds_breaks_and_servo_platens() {
     let mut a = bonded_world();

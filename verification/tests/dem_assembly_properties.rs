@@ -19,13 +19,14 @@
 //! within 64 n ε Σ|term| (Σ|term| the sum of the magnitudes added). Chunked against unsplit: bitwise.
 use lbdem_kernels::dem::assembly::{
     add_bond_forces, add_pair_forces, add_wall_contact_forces, bond_forces, bond_forces_placed,
-    integrate_all, pair_contacts, pair_contacts_placed, wall_contacts_scratch_len, wall_loads,
-    AssemblyError, ContactModel, ContactSums, WallBody, WallContactForce, WallLoad,
+    integrate_all, pair_contacts, pair_contacts_hinted, pair_contacts_placed,
+    wall_contacts_scratch_len, wall_loads, AssemblyError, ContactModel, ContactSums, WallBody,
+    WallContactForce, WallLoad,
 };
 use lbdem_kernels::dem::bond::{Bond, BondForce, BondLaw, ParallelBond, PointBond};
 use lbdem_kernels::dem::contact::{
     closest_approach, ellipse_ellipse, ellipse_ellipse_if_touching, ellipse_sample_separates,
-    wall_contact, ELLIPSE_SAMPLES,
+    ellipse_separated_along, wall_contact, ELLIPSE_SAMPLES,
 };
 use lbdem_kernels::dem::integrate::central_difference_step;
 use lbdem_kernels::dem::law::{linear_contact_force, BodyState, ContactForce};
@@ -76,6 +77,12 @@ fn particle() -> impl Strategy<Value = Particle<f64>> {
             p.angular_velocity = w;
             p
         })
+}
+
+/// Whether both particles of a pair are discs (the pair passes take the closed form for them).
+fn both_discs(ps: &[Particle<f64>], [i, j]: [usize; 2]) -> bool {
+    use lbdem_kernels::dem::shape::Shape;
+    matches!(ps[i].shape, Shape::Disc { .. }) && matches!(ps[j].shape, Shape::Disc { .. })
 }
 
 fn cross(a: [f64; 2], b: [f64; 2]) -> f64 {
@@ -942,6 +949,109 @@ proptest! {
             }
             None => prop_assert!(!full.is_active(), "culled an active pair: overlap {}", full.overlap),
         }
+    }
+}
+
+proptest! {
+    #![proptest_config(config(256))]
+
+    /// The hinted pair pass (`pair_contacts_hinted`, the driver's) is bitwise the placed pass whatever the
+    /// hints: random directions (unit, zero, or the exact normals of the particles' own contacts, which touch),
+    /// then, after every particle moved a step, the hints the first pass left. It leaves a zero hint exactly at
+    /// the pairs found interpenetrating, and the hints it leaves at the others separate them at this step
+    /// (each such pair, run again with the same positions, is culled by its hint or by the samples before the
+    /// search); a hint buffer shorter than the pairs is refused.
+    #[test]
+    fn hints_change_no_bit_and_are_left_where_they_separate(
+        ps in prop::collection::vec(particle(), 2..8),
+        histories in prop::collection::vec(-1.0f64..1.0, 28),
+        spread in prop_oneof![Just(0.3), Just(1.0), Just(2.0)],
+        angles in prop::collection::vec(prop_oneof![Just(f64::NAN), -3.2f64..3.2], 28),
+        dt in prop_oneof![Just(1e-3), Just(1e-2)],
+    ) {
+        let ps: Vec<Particle<f64>> = ps.into_iter().map(|mut p| { p.position *= spread; p }).collect();
+        let m = model(0.5);
+        let pairs = all_pairs(ps.len());
+        let n = pairs.len();
+        // Initial hints: none (NaN angle), a random unit direction, or the pair's own contact normal (a
+        // direction of largest gap).
+        let mut hints: Vec<[f64; 2]> = (0..n)
+            .map(|k| {
+                let [i, j] = pairs[k];
+                match angles[k] {
+                    t if t.is_nan() => [0.0, 0.0],
+                    t if t > 1.6 => {
+                        let c = closest_approach(&ps[i], &ps[j]);
+                        [c.normal[0], c.normal[1]]
+                    }
+                    t => [t.cos(), t.sin()],
+                }
+            })
+            .collect();
+        let mut now = ps.clone();
+        let mut shear = histories[..n].to_vec();
+        let mut shear_p = shear.clone();
+        for round in 0..2 {
+            let placed: Vec<_> = now.iter().map(Particle::placed).collect();
+            let mut slots = vec![ContactForce::zero(); n];
+            let mut slots_p = vec![ContactForce::zero(); n];
+            pair_contacts_hinted(&m, &now, &placed, &pairs, &mut shear, &mut hints, dt, &mut slots)
+                .expect("valid input");
+            pair_contacts_placed(&m, &now, &placed, &pairs, &mut shear_p, dt, &mut slots_p)
+                .expect("valid input");
+            for k in 0..n {
+                prop_assert_eq!(format!("{:?}", slots[k]), format!("{:?}", slots_p[k]), "round {} pair {:?}", round, pairs[k]);
+                prop_assert_eq!(shear[k].to_bits(), shear_p[k].to_bits());
+                let [i, j] = pairs[k];
+                let (a, b) = (&placed[i], &placed[j]);
+                if both_discs(&now, pairs[k]) {
+                    continue;
+                }
+                if ellipse_ellipse(a, b).is_active() {
+                    prop_assert_eq!(hints[k], [0.0, 0.0], "round {} pair {:?}: a hint left at a contact", round, pairs[k]);
+                }
+            }
+            // Run again at the same positions: every pair is culled before the search, or searched and found
+            // interpenetrating (its hint zero).
+            let mut again = hints.clone();
+            let culled = pair_contacts_hinted(&m, &now, &placed, &pairs, &mut shear.clone(), &mut again, dt, &mut vec![ContactForce::zero(); n])
+                .expect("valid input");
+            // (Disc pairs take the closed form: their hints are not read.)
+            let hinted = hints.iter().zip(&pairs).filter(|(h, &[i, j])| {
+                !both_discs(&now, [i, j])
+                    && ellipse_separated_along(&placed[i], &placed[j], lbdem_kernels::math::vector(h[0], h[1]))
+            }).count();
+            prop_assert_eq!(culled, hinted);
+            now = moved(&now, dt);
+        }
+        let placed: Vec<_> = now.iter().map(Particle::placed).collect();
+        prop_assert!(pair_contacts_hinted(&m, &now, &placed, &pairs, &mut shear, &mut hints[..n - 1], dt, &mut vec![ContactForce::zero(); n]).is_err());
+    }
+
+    /// `ellipse_separated_along` is a certain cull: wherever a direction passes it, the full search finds the
+    /// pair apart (not active); and it passes the search's own normal of a pair apart by more than 1e-9 of its
+    /// size, and never the zero vector. Random ellipses and discs from overlapping to apart, random directions.
+    #[test]
+    fn a_separating_direction_is_certain_and_found(
+        a in particle(),
+        b in particle(),
+        spread in prop_oneof![Just(0.3), Just(1.0), Just(2.0)],
+        theta in -3.2f64..3.2,
+    ) {
+        let (mut a, mut b) = (a, b);
+        a.position *= spread;
+        b.position *= spread;
+        let (pa, pb) = (a.placed(), b.placed());
+        let full = ellipse_ellipse(&pa, &pb);
+        let n = lbdem_kernels::math::vector(theta.cos(), theta.sin());
+        if ellipse_separated_along(&pa, &pb, n) {
+            prop_assert!(!full.is_active(), "a direction passed at a contact: overlap {}", full.overlap);
+        }
+        let size = pa.a.max(pa.b) + pb.a.max(pb.b);
+        if full.overlap < -1e-9 * size {
+            prop_assert!(ellipse_separated_along(&pa, &pb, full.normal), "the search's normal of a pair apart by {}", -full.overlap);
+        }
+        prop_assert!(!ellipse_separated_along(&pa, &pb, lbdem_kernels::math::vector(0.0, 0.0)));
     }
 }
 

@@ -23,7 +23,8 @@
 //! Units: as the per-contact kernels (consistent, caller-chosen).
 use super::bond::{Bond, BondForce};
 use super::contact::{
-    disc_disc, ellipse_ellipse_if_touching, ellipse_sample_separates, wall_contact,
+    disc_disc, ellipse_contact_or_separation, ellipse_sample_separates, ellipse_separated_along,
+    wall_contact,
 };
 use super::integrate::{central_difference_step, particle_critical_time_step};
 use super::law::{effective_mass, linear_contact_force, BodyState, ContactForce, ContactLaw};
@@ -205,9 +206,11 @@ pub fn pair_contacts<T: Real>(
         |i| particles[i].placed(),
         pairs,
         shear,
+        None,
         dt,
         out,
     )
+    .map(|_| ())
 }
 
 /// [`pair_contacts`] with each particle's placed shape (centre, semi-axes, cosine and sine of its orientation)
@@ -227,25 +230,76 @@ pub fn pair_contacts_placed<T: Real>(
     if placed.len() < particles.len() {
         return Err(AssemblyError::BufferLength);
     }
-    pair_contacts_with(model, particles, |i| placed[i], pairs, shear, dt, out)
+    pair_contacts_with(model, particles, |i| placed[i], pairs, shear, None, dt, out).map(|_| ())
+}
+
+/// [`pair_contacts_placed`] with a separating direction kept per pair (`hints`, aligned with `pairs`; the zero
+/// vector for none): an ellipse pair whose hint still separates it with room to spare
+/// ([`ellipse_separated_along`]) gets the slot and history of an inactive contact without the closest-approach
+/// search. The pass writes each hint as it leaves the pair: the sample direction that separated it, or the
+/// normal of a search that found it apart; zero where the pair interpenetrates; unchanged where a hint or the
+/// sample nearest to the line of centres culled it. Returns the number of pairs a hint culled.
+///
+/// Where the search finds the largest gap (every shape its domain admits, to its last bits), the slots and
+/// histories are bitwise those of [`pair_contacts_placed`] whatever the hints: a hint only culls pairs that
+/// are apart by more than the roundoff of a gap, which the search reports as inactive. So hints may be lost
+/// (a checkpoint does not keep them) or carried from any earlier step without changing a result. `hints`
+/// needs an entry per pair.
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+pub fn pair_contacts_hinted<T: Real>(
+    model: &ContactModel<T>,
+    particles: &[Particle<T>],
+    placed: &[Placed<T>],
+    pairs: &[[usize; 2]],
+    shear: &mut [T],
+    hints: &mut [[T; 2]],
+    dt: T,
+    out: &mut [ContactForce<T>],
+) -> Result<usize, AssemblyError> {
+    if placed.len() < particles.len() {
+        return Err(AssemblyError::BufferLength);
+    }
+    pair_contacts_with(
+        model,
+        particles,
+        |i| placed[i],
+        pairs,
+        shear,
+        Some(hints),
+        dt,
+        out,
+    )
 }
 
 #[inline(always)]
+#[allow(clippy::too_many_arguments)]
 fn pair_contacts_with<T: Real>(
     model: &ContactModel<T>,
     particles: &[Particle<T>],
     placed: impl Fn(usize) -> Placed<T>,
     pairs: &[[usize; 2]],
     shear: &mut [T],
+    mut hints: Option<&mut [[T; 2]]>,
     dt: T,
     out: &mut [ContactForce<T>],
-) -> Result<(), AssemblyError> {
-    if shear.len() < pairs.len() || out.len() < pairs.len() {
+) -> Result<usize, AssemblyError> {
+    if shear.len() < pairs.len()
+        || out.len() < pairs.len()
+        || hints.as_ref().is_some_and(|h| h.len() < pairs.len())
+    {
         return Err(AssemblyError::BufferLength);
     }
     check_pairs(pairs, particles.len())?;
-    for ((&[i, j], history), slot) in pairs.iter().zip(shear.iter_mut()).zip(out.iter_mut()) {
+    let mut culled = 0;
+    for (k, ((&[i, j], history), slot)) in pairs
+        .iter()
+        .zip(shear.iter_mut())
+        .zip(out.iter_mut())
+        .enumerate()
+    {
         let (pi, pj) = (&particles[i], &particles[j]);
+        let hint = hints.as_deref_mut().map(|h| &mut h[k]);
         // The branches of `closest_approach`, with the placed shapes given.
         let c = match (pi.shape, pj.shape) {
             (Shape::Disc { radius: ri }, Shape::Disc { radius: rj }) => {
@@ -253,12 +307,26 @@ fn pair_contacts_with<T: Real>(
             }
             _ => {
                 let (a, b) = (placed(i), placed(j));
-                // Two culls that never change a slot: the sample nearest to the line of centres, then all
-                // the search's samples (the refinements are skipped where any separates).
-                let touching = if ellipse_sample_separates(&a, &b) {
+                // Culls that never change a slot: the pair's hint, the sample nearest to the line of
+                // centres, then all the search's samples (the refinements are skipped where any separates).
+                let apart = hint
+                    .as_deref()
+                    .is_some_and(|h| ellipse_separated_along(&a, &b, Vector::new(h[0], h[1])));
+                if apart {
+                    culled += 1;
+                }
+                let touching = if apart || ellipse_sample_separates(&a, &b) {
                     None
                 } else {
-                    ellipse_ellipse_if_touching(&a, &b)
+                    let (found, separating) = match ellipse_contact_or_separation(&a, &b) {
+                        Err(n) => (None, n),
+                        Ok(c) if c.is_active() => (Some(c), Vector::zeros()),
+                        Ok(c) => (Some(c), c.normal),
+                    };
+                    if let Some(h) = hint {
+                        *h = [separating[0], separating[1]];
+                    }
+                    found
                 };
                 let Some(c) = touching else {
                     // What `linear_contact_force` does with an inactive contact.
@@ -279,7 +347,7 @@ fn pair_contacts_with<T: Real>(
             dt,
         );
     }
-    Ok(())
+    Ok(culled)
 }
 
 /// Summation pass of the pair contacts: add the forces and torques of `contacts` (aligned with `pairs`, from

@@ -294,13 +294,14 @@ fn within_reach<T: Real>(
 }
 
 /// Copy per-pair values (e.g. the shear history) from `previous_pairs` to `pairs`, both sorted ascending
-/// without duplicates (as [`candidate_pairs`] returns them); pairs not present before get zero. Returns the
-/// number of values carried over, or `BufferLength` if a value slice is shorter than its pair list.
-pub fn carry_contact_history<T: Real>(
+/// without duplicates (as [`candidate_pairs`] returns them); pairs not present before get the default value
+/// (zero for numbers, a zero vector for `[T; 2]`). Returns the number of values carried over, or `BufferLength`
+/// if a value slice is shorter than its pair list.
+pub fn carry_contact_history<V: Copy + Default>(
     previous_pairs: &[[usize; 2]],
-    previous_values: &[T],
+    previous_values: &[V],
     pairs: &[[usize; 2]],
-    values: &mut [T],
+    values: &mut [V],
 ) -> Result<usize, GridError> {
     if previous_values.len() < previous_pairs.len() || values.len() < pairs.len() {
         return Err(GridError::BufferLength);
@@ -315,7 +316,7 @@ pub fn carry_contact_history<T: Real>(
             *value = previous_values[k];
             carried += 1;
         } else {
-            *value = T::zero();
+            *value = V::default();
         }
     }
     Ok(carried)

@@ -8,7 +8,8 @@
 //!    `margin` + a skin of [`VERLET_SKIN`] × the smallest bounding radius, rebuilt once a particle has moved plus
 //!    grown by [`VERLET_MOVE`] × the skin): the same pair list bit for bit, without a grid pass every step;
 //!    [`carry_contact_history`] (shear forces of persisting contacts);
-//! 2. contacts: [`pair_contacts_placed`] (closest approach + linear contact law per pair), [`add_pair_forces`];
+//! 2. contacts: [`pair_contacts_hinted`] (closest approach + linear contact law per pair, pairs that a kept
+//!    direction still separates culled), [`add_pair_forces`];
 //! 3. bonds: [`bond_forces_placed`] (point bond of eq. 6.13 or Potyondy & Cundall 2004 parallel bond per bond),
 //!    [`add_bond_forces`]; each break recorded as a [`BreakRecord`] (step, position, mode, orientation, load);
 //! 4. platens: [`add_wall_contact_forces`] with each platen's own velocity (a moving wall), [`wall_loads`];
@@ -32,7 +33,7 @@
 //! length of a unit-thickness sample, dyne/cm ≡ dyne/cm² × 1 cm).
 use lbdem_kernels::dem::assembly::{
     add_bond_forces, add_pair_forces, add_wall_contact_forces, bond_forces_placed, integrate_all,
-    pair_contacts_placed, wall_loads, ContactModel, WallBody, WallContactForce, WallLoad,
+    pair_contacts_hinted, wall_loads, ContactModel, WallBody, WallContactForce, WallLoad,
 };
 pub use lbdem_kernels::dem::bond::{Bond, BondLaw};
 use lbdem_kernels::dem::bond::{BondForce, BreakMode, ParallelBond, PointBond};
@@ -258,6 +259,15 @@ pub struct DemWorld<T> {
     previous_pairs: Vec<[usize; 2]>,
     #[serde(skip)]
     previous_shear: Vec<T>,
+    /// A direction that separated each pair of `pairs` at an earlier step, or zero (the pair pass's hints,
+    /// `pair_contacts_hinted`): speed only, no result depends on them, so a checkpoint does not keep them.
+    #[serde(skip)]
+    hints: Vec<[T; 2]>,
+    #[serde(skip)]
+    previous_hints: Vec<[T; 2]>,
+    /// Pairs culled by their hint since the world was made or loaded (for tests and profiles).
+    #[serde(skip)]
+    hint_culls: u64,
     #[serde(skip)]
     contact_forces: Vec<ContactForce<T>>,
     #[serde(skip)]
@@ -332,6 +342,9 @@ impl<T: Real> DemWorld<T> {
             verlet_valid: false,
             previous_pairs: Vec::new(),
             previous_shear: Vec::new(),
+            hints: Vec::new(),
+            previous_hints: Vec::new(),
+            hint_culls: 0,
             contact_forces: Vec::new(),
             bond_forces: Vec::new(),
             wall_bodies: Vec::new(),
@@ -371,6 +384,12 @@ impl<T: Real> DemWorld<T> {
     /// Steps taken.
     pub fn step_count(&self) -> u64 {
         self.step
+    }
+
+    /// Ellipse pairs that a kept separating direction culled before the closest-approach search, since the
+    /// world was made or read from a checkpoint (`pair_contacts_hinted`; speed only).
+    pub fn hint_culls(&self) -> u64 {
+        self.hint_culls
     }
 
     /// Active particle–particle contacts in the last step.
@@ -727,9 +746,14 @@ impl<T: Real> DemWorld<T> {
             .extend(self.particles.iter().map(|p| p.shape.bounding_radius()));
         std::mem::swap(&mut self.pairs, &mut self.previous_pairs);
         std::mem::swap(&mut self.shear, &mut self.previous_shear);
+        std::mem::swap(&mut self.hints, &mut self.previous_hints);
+        // A world read from a checkpoint has pairs but no hints: none for them.
+        self.previous_hints
+            .resize(self.previous_pairs.len(), [T::zero(); 2]);
         self.pairs.clear();
         if n < 2 {
             self.shear.clear();
+            self.hints.clear();
             self.verlet_valid = false;
             return;
         }
@@ -765,6 +789,14 @@ impl<T: Real> DemWorld<T> {
             &mut self.shear,
         )
         .expect("history buffers sized to their pair lists");
+        self.hints.resize(self.pairs.len(), [T::zero(); 2]);
+        carry_contact_history(
+            &self.previous_pairs,
+            &self.previous_hints,
+            &self.pairs,
+            &mut self.hints,
+        )
+        .expect("hint buffers sized to their pair lists");
     }
 
     /// Choose the instruction set of the pair-contact pass (the ellipse searches' samples vectorise). Results
@@ -804,20 +836,28 @@ impl<T: Real> DemWorld<T> {
         let placed: Vec<Placed<T>> = particles.par_iter().map(Particle::placed).collect();
         self.contact_forces
             .resize(self.pairs.len(), ContactForce::zero());
-        self.pairs
+        let culled: usize = self
+            .pairs
             .par_chunks(PARALLEL_CHUNK)
             .zip(self.shear.par_chunks_mut(PARALLEL_CHUNK))
+            .zip(self.hints.par_chunks_mut(PARALLEL_CHUNK))
             .zip(self.contact_forces.par_chunks_mut(PARALLEL_CHUNK))
-            .try_for_each(|((pairs, shear), out)| {
+            .map(|(((pairs, shear), hints), out)| {
                 // At the widest vector level of the CPU (the 32 samples of each ellipse search are
                 // independent; IEEE arithmetic gives the same bits at every level).
                 with_simd(
                     simd,
                     #[inline(always)]
-                    || pair_contacts_placed(&model, particles, &placed, pairs, shear, dt, out),
+                    || {
+                        pair_contacts_hinted(
+                            &model, particles, &placed, pairs, shear, hints, dt, out,
+                        )
+                    },
                 )
             })
+            .try_reduce(|| 0, |a, b| Ok(a + b))
             .expect(INVALID);
+        self.hint_culls += culled as u64;
         let sums = add_pair_forces(
             &self.pairs,
             &self.contact_forces,
