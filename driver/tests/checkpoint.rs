@@ -184,14 +184,7 @@ fn bonded_world() -> DemWorld<f64> {
 /// checkpoint without them, continues bitwise as the world that kept them, and the hints did cull pairs.
 #[test]
 fn ellipse_world_resumes_bitwise_without_its_separation_hints() {
-    use lbdem::engine::dem::{generate_packing, PackingSpec};
-    let mut spec = PackingSpec::dissertation(1.2, 1.2, 0.5, 3);
-    spec.max_servo_steps = 2000;
-    let bonds = Some(BondSpec::Point {
-        stiffness: 1e5,
-        strength: 700.0,
-    });
-    let mut p = generate_packing(&spec, bonds).unwrap();
+    let mut p = crate::common::bonded_ellipse_packing();
     let b = p.sample_box;
     p.world.platens[b.top].control = PlatenControl::Speed(0.5);
     let mut a = p.world;

@@ -189,13 +189,7 @@ fn packing_is_bitwise_deterministic_for_a_seed() {
 #[test]
 fn ellipse_contacts_are_bitwise_the_same_at_every_instruction_set() {
     use lbdem::engine::exec::SimdLevel;
-    let mut spec = PackingSpec::dissertation(1.2, 1.2, 0.5, 3);
-    spec.max_servo_steps = 2000;
-    let bonds = Some(BondSpec::Point {
-        stiffness: 1e5,
-        strength: 700.0,
-    });
-    let packed = generate_packing(&spec, bonds).unwrap();
+    let packed = crate::common::bonded_ellipse_packing();
     let run = |level: SimdLevel| {
         let mut p = packed.clone();
         p.world.set_simd(level).unwrap();

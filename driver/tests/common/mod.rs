@@ -94,3 +94,16 @@ pub fn run_channel(
     scene.run.check_interval = Some(interval);
     simulate(&Case::<Channel>::new(scene)?, &Exec::default())
 }
+
+/// A small bonded packing of the dissertation's ellipses (1.2 × 1.2 cm, aspect 0.5, point bonds of table 6.1,
+/// seed 3): ellipse pairs in contact, for the tests of the pair pass.
+pub fn bonded_ellipse_packing() -> lbdem::engine::dem::Packing<f64> {
+    use lbdem::engine::dem::{generate_packing, BondSpec, PackingSpec};
+    let mut spec = PackingSpec::dissertation(1.2, 1.2, 0.5, 3);
+    spec.max_servo_steps = 2000;
+    let bonds = Some(BondSpec::Point {
+        stiffness: 1e5,
+        strength: 700.0,
+    });
+    generate_packing(&spec, bonds).unwrap()
+}
