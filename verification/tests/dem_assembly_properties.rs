@@ -79,6 +79,16 @@ fn particle() -> impl Strategy<Value = Particle<f64>> {
         })
 }
 
+/// The particles with their positions scaled by `factor`: from mostly overlapping (< 1) to mostly apart.
+fn spread_out(ps: Vec<Particle<f64>>, factor: f64) -> Vec<Particle<f64>> {
+    ps.into_iter()
+        .map(|mut p| {
+            p.position *= factor;
+            p
+        })
+        .collect()
+}
+
 /// Whether both particles of a pair are discs (the pair passes take the closed form for them).
 fn both_discs(ps: &[Particle<f64>], [i, j]: [usize; 2]) -> bool {
     use lbdem_kernels::dem::shape::Shape;
@@ -895,7 +905,7 @@ proptest! {
         spread in prop_oneof![Just(0.3), Just(1.0), Just(2.0)],
     ) {
         // Spread the particles out by a random factor: from mostly overlapping to mostly apart.
-        let ps: Vec<Particle<f64>> = ps.into_iter().map(|mut p| { p.position *= spread; p }).collect();
+        let ps = spread_out(ps, spread);
         let m = model(0.5);
         let pairs = all_pairs(ps.len());
         let dt = 1e-5;
@@ -957,10 +967,9 @@ proptest! {
 
     /// The hinted pair pass (`pair_contacts_hinted`, the driver's) is bitwise the placed pass whatever the
     /// hints: random directions (unit, zero, or the exact normals of the particles' own contacts, which touch),
-    /// then, after every particle moved a step, the hints the first pass left. It leaves a zero hint exactly at
-    /// the pairs found interpenetrating, and the hints it leaves at the others separate them at this step
-    /// (each such pair, run again with the same positions, is culled by its hint or by the samples before the
-    /// search); a hint buffer shorter than the pairs is refused.
+    /// then, after every particle moved a step, the hints the first pass left. It leaves a zero hint at every
+    /// interpenetrating ellipse pair; run again at the same positions, it culls exactly the pairs whose hints
+    /// pass `ellipse_separated_along`; a hint buffer shorter than the pairs is refused.
     #[test]
     fn hints_change_no_bit_and_are_left_where_they_separate(
         ps in prop::collection::vec(particle(), 2..8),
@@ -969,7 +978,7 @@ proptest! {
         angles in prop::collection::vec(prop_oneof![Just(f64::NAN), -3.2f64..3.2], 28),
         dt in prop_oneof![Just(1e-3), Just(1e-2)],
     ) {
-        let ps: Vec<Particle<f64>> = ps.into_iter().map(|mut p| { p.position *= spread; p }).collect();
+        let ps = spread_out(ps, spread);
         let m = model(0.5);
         let pairs = all_pairs(ps.len());
         let n = pairs.len();
