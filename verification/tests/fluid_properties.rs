@@ -19,7 +19,8 @@
 //!   band splitting.
 use lbdem_kernels::fluid::aa::{load_from_rows, store_in_rows, AaStep};
 use lbdem_kernels::fluid::boundary::{
-    zou_he, zou_he_corner, Boundaries, SideCondition, SideProfiles,
+    radiating_density, zou_he, zou_he_corner, zou_he_known_sum, Boundaries, SideCondition,
+    SideProfiles,
 };
 use lbdem_kernels::fluid::collide::{
     bgk_collide, bgk_collide_forced, bgk_collide_slices, fluid_collide, lane_class, psm_collide,
@@ -940,6 +941,64 @@ proptest! {
             }
         }
         prop_assert!(max_abs_diff(&g, &r) <= ORACLE * scale(&f));
+    }
+
+    /// The known sum of a Zou–He node reads only the populations the closure keeps (the reference's incoming
+    /// set replaced by anything leaves it bitwise unchanged) and is ρ(1 + u_n) of the closed node, u_n the
+    /// outward normal velocity.
+    #[test]
+    fn zou_he_known_sum_is_density_times_one_plus_outward_velocity(
+        f in node_populations(), side in 0usize..4, rho0 in 0.5f64..=1.5, junk in -1.0f64..1.0,
+    ) {
+        let (side, rside, normal) = [
+            (Side::West, reference::Side::West, [-1.0, 0.0]),
+            (Side::East, reference::Side::East, [1.0, 0.0]),
+            (Side::South, reference::Side::South, [0.0, -1.0]),
+            (Side::North, reference::Side::North, [0.0, 1.0]),
+        ][side];
+        let known = zou_he_known_sum(&f, side);
+        let mut h = f;
+        for i in reference::incoming(rside) {
+            h[i] = junk;
+        }
+        prop_assert_eq!(zou_he_known_sum(&h, side).to_bits(), known.to_bits());
+        let mut g = f;
+        zou_he(&mut g, side, SideCondition::Pressure { density: rho0 });
+        let (rho, j) = (density(&g), momentum(&g));
+        let outward = (j[0] * normal[0] + j[1] * normal[1]) / rho;
+        prop_assert!((known - rho * (1.0 + outward)).abs() <= ROUNDOFF * scale(&g),
+            "K = {known} against ρ(1 + u_n) = {}", rho * (1.0 + outward));
+    }
+
+    /// The radiating side's density solves its characteristic condition with the Zou–He relation,
+    /// ρ = ρ₀(1 + √3(1 − r)(K/ρ − 1 − ū)), and the running mean moves by r(u_n − ū) with u_n = K/ρ − 1; r = 1
+    /// holds ρ₀ exactly, a node at rest with ū = 0 holds ρ₀ at any r, and r = 0 passes the wave, ρ − ρ₀ = ρ₀√3 u_n.
+    #[test]
+    fn radiating_density_solves_the_characteristic_condition(
+        rho0 in 0.5f64..=1.5, un in -0.05f64..0.05, mean in -0.05f64..0.05, rate in 0.0f64..=1.0,
+        wave in -0.05f64..0.05,
+    ) {
+        // K of a node whose density is off ρ₀ by a wave and whose outward velocity is u_n.
+        let known = rho0 * (1.0 + wave) * (1.0 + un);
+        let mut m = mean;
+        let rho = radiating_density(rho0, known, &mut m, rate);
+        let u = known / rho - 1.0;
+        let condition = rho0 * (1.0 + 3f64.sqrt() * (1.0 - rate) * (u - mean));
+        prop_assert!((rho - condition).abs() <= ROUNDOFF, "ρ = {rho}, condition {condition}");
+        prop_assert!((m - (mean + rate * (u - mean))).abs() <= ROUNDOFF, "mean {m}");
+        let mut m1 = mean;
+        prop_assert_eq!(radiating_density(rho0, known, &mut m1, 1.0).to_bits(), rho0.to_bits());
+        let mut m0 = 0.0;
+        let rest = radiating_density(rho0, rho0, &mut m0, rate);
+        prop_assert!((rest - rho0).abs() <= ROUNDOFF, "at rest {rest}");
+        let mut mp = 0.0;
+        let passed = radiating_density(rho0, known, &mut mp, 0.0);
+        let up = known / passed - 1.0;
+        prop_assert!((passed - rho0 - rho0 * 3f64.sqrt() * up).abs() <= ROUNDOFF);
+        // f32 agrees with f64 to its precision.
+        let mut m32 = mean as f32;
+        let r32 = radiating_density(rho0 as f32, known as f32, &mut m32, rate as f32);
+        prop_assert!((f64::from(r32) - rho).abs() <= 64.0 * f64::from(f32::EPSILON), "f32 {r32} against {rho}");
     }
 
     /// Zou–He corners (two Zou–He sides): the node ends at exactly ρ and u, the four known populations (rest,

@@ -13,7 +13,9 @@ use lbdem_kernels::coverage::{ellipse_cell_grid, ellipse_grid_fractions, CellGri
 use lbdem_kernels::fluid::aa::{
     plane_row, store_post_collision_in_plane, to_collided, AaStep, Layout,
 };
-use lbdem_kernels::fluid::boundary::{Boundaries, SideCondition, SideProfiles};
+use lbdem_kernels::fluid::boundary::{
+    radiating_density, zou_he_known_sum, Boundaries, SideCondition, SideProfiles,
+};
 use lbdem_kernels::fluid::collide::{
     psm_velocity, Collision, OpenLinks, PsmParams, SolidOperator, SolidShare, Weighting,
     ALL_LINKS_OPEN,
@@ -45,6 +47,19 @@ mod persist;
 fn next_list_id() -> u64 {
     static IDS: AtomicU64 = AtomicU64::new(1);
     IDS.fetch_add(1, AtomicOrdering::Relaxed)
+}
+
+/// The state of a radiating drained side ([`FluidLattice::radiate`]): the density slow flow sees, the rate r
+/// of the running mean of the outward velocity (per step; the side reflects a wave of angular frequency ω per
+/// step with amplitude r/√(4ω² + r²)) and that mean.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct RadiatingSide {
+    /// Density the side returns to (lattice units).
+    pub density: f64,
+    /// Rate of the running mean, in (0, 1] per step.
+    pub rate: f64,
+    /// Running mean of the outward velocity (lattice units; 0 at the start).
+    pub mean: f64,
 }
 
 /// A D2Q9 lattice with its buffers.
@@ -1770,6 +1785,80 @@ impl<T: Real> FluidLattice<T> {
                 "declare the side as a pressure boundary when building the lattice",
             )),
         }
+    }
+
+    /// The mean over the nodes of pressure side `side` of the populations its Zou–He closure keeps, tangential
+    /// once and outgoing twice ([`zou_he_known_sum`]: ρ(1 + u_n) at each node), as the next step gathers them.
+    /// The corner nodes are left out where the neighbouring side is not periodic. `None` without such a node.
+    pub fn side_known_sum(&self, side: Side) -> Option<f64> {
+        let (nx, ny) = (self.shape.nx, self.shape.ny);
+        let periodic = self.bc.periodic_axes();
+        let along = |n: usize, periodic: bool| {
+            if periodic {
+                0..n
+            } else {
+                1..n.saturating_sub(1)
+            }
+        };
+        let nodes: Vec<(usize, usize)> = match side {
+            Side::North => along(nx, periodic[0]).map(|x| (x, ny - 1)).collect(),
+            Side::South => along(nx, periodic[0]).map(|x| (x, 0)).collect(),
+            Side::East => along(ny, periodic[1]).map(|y| (nx - 1, y)).collect(),
+            Side::West => along(ny, periodic[1]).map(|y| (0, y)).collect(),
+        };
+        let profiles = side_profiles(&self.profiles);
+        let (mut sum, mut count) = (0.0, 0usize);
+        for (x, y) in nodes {
+            if self.flags[self.shape.index(x, y)] == SOLID {
+                continue;
+            }
+            let f = gather_node_in(
+                &self.shape,
+                self.current(),
+                self.layout,
+                &self.bc,
+                &profiles,
+                &self.flags,
+                x,
+                y,
+            );
+            sum += zou_he_known_sum(&f, side).to_f64_exact();
+            count += 1;
+        }
+        (count > 0).then(|| sum / count as f64)
+    }
+
+    /// Hold the pressure side `side` for the next step as a radiating drained side
+    /// ([`lbdem_kernels::fluid::boundary::radiating_density`]): its density solved with the Zou–He relation of
+    /// its own nodes ([`FluidLattice::side_known_sum`]) and the running mean in `state`, so that sound leaves
+    /// through it while slow flow still sees `state.density`. Call before every [`FluidLattice::step`]. A side
+    /// that is not a pressure side is refused (as by [`FluidLattice::set_side_density`]).
+    pub fn radiate(&mut self, side: Side, state: &mut RadiatingSide) -> Result<()> {
+        if !matches!(self.bc.side(side), SideCondition::Pressure { .. }) {
+            return self.set_side_density(side, T::one());
+        }
+        if !(state.density.is_finite() && state.density > 0.0 && (0.0..=1.0).contains(&state.rate))
+        {
+            return Err(LbdemError::field(
+                "radiating side",
+                format!("density {:e}, rate {:e}", state.density, state.rate),
+                "needs a finite positive density and a running-mean rate in [0, 1]",
+                "rate = 1/(steps the running mean spans), e.g. ten sound-crossing times",
+            ));
+        }
+        let Some(known) = self.side_known_sum(side) else {
+            return Ok(());
+        };
+        let rho = radiating_density(state.density, known, &mut state.mean, state.rate);
+        if !(rho.is_finite() && rho > 0.0) {
+            return Err(LbdemError::field(
+                "boundary side",
+                format!("{side:?}"),
+                &format!("a radiating side came to density {rho:e} (known sum {known:e})"),
+                "the flow through the side is not a small acoustic perturbation: lower the load or the drive",
+            ));
+        }
+        self.set_side_density(side, T::lit(rho))
     }
 
     /// Let [`FluidLattice::cover_with_bodies`] keep every body's cells (nodes and fractions) while no point of

@@ -420,3 +420,55 @@ pub fn zou_he_corner<T: Real>(f: &mut [T; Q], x_side: Side, y_side: Side, rho: T
     f[e1] = x + T::lit(1.0 / 12.0) * rho * cu(e1);
     f[e2] = x + T::lit(1.0 / 12.0) * rho * cu(e2);
 }
+
+/// Sum of the populations of a Zou–He node on `side` that the closure does not replace, the tangential ones
+/// once and the outgoing ones twice: ρ(1 + u_n) for the node's density ρ and outward normal velocity u_n
+/// (north: f₀ + f₁ + f₃ + 2(f₂ + f₅ + f₆)).
+#[inline]
+pub fn zou_he_known_sum<T: Real>(f: &[T; Q], side: Side) -> T {
+    let (tangential, outgoing) = match side {
+        Side::North => ([0, 1, 3], [2, 5, 6]),
+        Side::South => ([0, 1, 3], [4, 7, 8]),
+        Side::East => ([0, 2, 4], [1, 5, 8]),
+        Side::West => ([0, 2, 4], [3, 6, 7]),
+    };
+    sum(f, tangential) + T::lit(2.0) * sum(f, outgoing)
+}
+
+/// The density a Zou–He pressure side holds to let sound out: a **radiating drained side**.
+///
+/// A pressure side that holds ρ₀ is a pressure-release mirror: a plane sound wave that reaches it goes back into
+/// the lattice whole, inverted. A side that drains into a large reservoir should hold ρ₀ for slow flow but pass
+/// sound on (the reservoir carries it away). In linear acoustics (p′ = c_s²ρ′, impedance Z = ρ₀c_s) a plane wave
+/// leaving through the side carries p′ = Z u_n, u_n the outward normal velocity, and the wave coming in is
+/// w⁻ = p′ − Z u_n. The characteristic non-reflecting condition (Thompson 1987, J. Comput. Phys. 68:1; Poinsot
+/// & Lele 1992, J. Comput. Phys. 101:104; for lattice Boltzmann, Izquierdo & Fueyo 2008, Phys. Rev. E 78:046707)
+/// sets w⁻ = 0 for what changes fast and lets the side return to ρ₀ for what changes slowly:
+///
+/// ρ = ρ₀ (1 + √3 (u_n − ū_n)),   ū_n ← ū_n + r (u_n − ū_n)   (ρ₀/c_s = ρ₀√3),
+///
+/// ū_n (`mean`, held by the caller, 0 at the start) a running mean of the outward velocity over about 1/r steps.
+/// It is solved at the side's own nodes, together with the Zou–He relation ρ(1 + u_n) = K (`known`, the
+/// [`zou_he_known_sum`] of the side, its mean along the side for one density per side), so that the density
+/// and the velocity it is computed from belong to the same step (a velocity read one node inside, one step
+/// late, feeds back and oscillates): as u_n − ū_n after the update is (1 − r)(u_n − ū_n) before it, with
+/// s = √3 (1 − r) and ū_n before the update, ρ² − ρ₀(1 − s(1 + ū_n))ρ − sρ₀K = 0, its positive root. With the continuous form of the running mean, a plane
+/// wave of angular frequency ω per step comes back with the amplitude r/√(4ω² + r²) of the one that arrived:
+/// r = 0 passes every wave (and holds the back pressure Z u_n of a steady outflow), r = 1 holds ρ₀ exactly
+/// (the mirror). Returns ρ and updates `mean` with u_n = K/ρ − 1.
+#[inline]
+pub fn radiating_density<T: Real>(rho0: T, known: T, mean: &mut T, rate: T) -> T {
+    let one = T::one();
+    let s = T::lit(3.0).sqrt() * (one - rate);
+    let b = rho0 * (one - s * (one + *mean));
+    let root = (b * b + T::lit(4.0) * s * rho0 * known).sqrt();
+    // The root's two forms, each free of cancellation on its side of b = 0.
+    let rho = if b >= T::zero() {
+        T::lit(0.5) * (b + root)
+    } else {
+        T::lit(2.0) * s * rho0 * known / (root - b)
+    };
+    let u = known / rho - one;
+    *mean += rate * (u - *mean);
+    rho
+}

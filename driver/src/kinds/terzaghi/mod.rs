@@ -6,6 +6,7 @@ use lbdem_kernels::coupling::CoupledBody;
 use lbdem_kernels::dem::assembly::ContactModel;
 use lbdem_kernels::fluid::boundary::{Boundaries, SideCondition};
 use lbdem_kernels::fluid::collide::SolidOperator;
+use lbdem_kernels::fluid::lattice::Side;
 use lbdem_kernels::fluid::step::FluidParams;
 use lbdem_kernels::math::{vector, Vector};
 use lbdem_reference::poroelastic::{
@@ -20,7 +21,7 @@ use crate::engine::dem::packing::{generate_packing, hexagonal_packing, PackingSp
 use crate::engine::dem::world::BondSpec;
 use crate::engine::dem::{elastic_contact, DemWorld};
 use crate::engine::exec::{Exec, ExecTarget};
-use crate::engine::lattice::FluidLattice;
+use crate::engine::lattice::{FluidLattice, RadiatingSide};
 use crate::error::{non_negative, positive, LbdemError, Result};
 use crate::input::limits::{self, Budget};
 use crate::observe::darcy::{permeability, SteadyFlow};
@@ -56,6 +57,12 @@ const MAX_DRY_STRAIN: f64 = 0.05;
 pub const DIFFUSION_DOMINATED: f64 = 20.0;
 /// Start-up: records earlier than this many fluid sound-crossing times of the column are not compared.
 pub const STARTUP_CROSSINGS: f64 = 3.0;
+
+/// Span of the running mean of a radiating drained top (`drained_top = "radiating"`), in sound-crossing times of
+/// the column: long against the column's undrained ringing (a quarter-wave period of about five crossings, so a
+/// wave of it comes back with under 2 % of its amplitude, r/(2ω)), short against the diffusion time the scenes
+/// are checked for (above 20 crossings; the back pressure of the slow outflow stays below 1 % of the load).
+pub const RADIATING_CROSSINGS: f64 = 10.0;
 
 const HINT: &str = "lower terzaghi.load or raise fluid.tau";
 /// [`HINT`] when the grains are under ΩΛ, whose pack mode grows at high τ.
@@ -153,6 +160,24 @@ pub struct TerzaghiSection {
     /// then being L − δ long.
     #[serde(default)]
     pub drained_surface: Option<DrainedSurface>,
+    /// What the lattice's top side is: absent or `"pressure"`, a Zou–He side held at the reservoir pressure (for
+    /// sound a pressure-release mirror: the undrained wave of the step rings between it and the sealed base);
+    /// `"radiating"`, a radiating drained side ([`FluidLattice::radiate`]): the same pressure for slow flow, but
+    /// sound leaves through it as into a large reservoir (running mean over [`RADIATING_CROSSINGS`]
+    /// sound-crossing times of the column).
+    #[serde(default)]
+    pub drained_top: Option<DrainedTop>,
+}
+
+/// The lattice's top side above the free fluid layer.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum DrainedTop {
+    /// Zou–He pressure side at the reservoir pressure.
+    #[default]
+    Pressure,
+    /// Radiating drained side.
+    Radiating,
 }
 
 /// Position of the drained surface in the comparison with Terzaghi's solution.
@@ -312,6 +337,9 @@ pub struct TerzaghiState {
     s: u64,
     profiles: Vec<Profile>,
     snapshots: SnapshotClock,
+    /// The radiating top's state (`drained_top = "radiating"`).
+    #[serde(default)]
+    radiating: Option<RadiatingSide>,
 }
 
 impl Persist for TerzaghiState {}
@@ -558,6 +586,14 @@ fn start(case: &Case<Terzaghi>, exec: &Exec) -> Result<TerzaghiState> {
         drained_depth,
     };
     let grains = world.dem.particles.len();
+    let radiating = (c.drained_top.unwrap_or_default() == DrainedTop::Radiating).then(|| {
+        let crossing_steps = c.height / u.sound_speed / u.timestep;
+        RadiatingSide {
+            density: 1.0,
+            rate: (1.0 / (RADIATING_CROSSINGS * crossing_steps)).min(1.0),
+            mean: 0.0,
+        }
+    });
     Ok(TerzaghiState {
         world,
         darcy: Some(darcy),
@@ -580,6 +616,7 @@ fn start(case: &Case<Terzaghi>, exec: &Exec) -> Result<TerzaghiState> {
         s: 0,
         profiles: Vec::new(),
         snapshots: SnapshotClock::default(),
+        radiating,
     })
 }
 
@@ -723,6 +760,9 @@ impl TerzaghiState {
                     let (f, m) = self.after[i];
                     self.world.applied[i] = (f * scale, m);
                 }
+            }
+            if let Some(r) = &mut self.radiating {
+                self.world.fluid.radiate(Side::North, r)?;
             }
             self.world.step();
             if s.is_multiple_of(self.record_every) {
