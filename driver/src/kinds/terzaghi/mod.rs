@@ -167,6 +167,15 @@ pub struct TerzaghiSection {
     /// sound-crossing times of the column).
     #[serde(default)]
     pub drained_top: Option<DrainedTop>,
+    /// An absorbing load (a matched dashpot on the loaded layer, after Lysmer & Kuhlemeyer 1969): the loaded
+    /// layer also feels −c (v − v̄) on its vertical velocity v (the loaded grains' mean, weighted by their shares
+    /// of the load), shared among its grains as the load is, with c = this factor × Z W, Z = √(M_u ρ_m) the
+    /// column's undrained impedance (M_u = K_v/(1 − γ) from the measured K_v and the predicted γ, ρ_m the mixture
+    /// density of the column), W the width, and v̄ a running mean of v over [`RADIATING_CROSSINGS`] sound-crossing
+    /// times. The undrained wave of the step then leaves through the loaded surface instead of ringing between
+    /// it and the sealed base; settlement, far slower, is hardly resisted. 1 is the matched dashpot; absent: none.
+    #[serde(default)]
+    pub load_dashpot: Option<f64>,
 }
 
 /// The lattice's top side above the free fluid layer.
@@ -257,6 +266,18 @@ pub struct Prediction {
     /// Depth of the drained surface in the comparison: δ with `drained_surface = "dividing_surface"`, else 0.
     #[serde(default)]
     pub drained_depth: f64,
+    /// Mixture density ρ_m of the column (fluid plus the grains' excess mass over the column's area).
+    #[serde(default)]
+    pub mixture_density: f64,
+    /// Undrained constrained modulus M_u = K_v/(1 − γ).
+    #[serde(default)]
+    pub undrained_modulus: f64,
+    /// Undrained impedance Z = √(M_u ρ_m) (stress per velocity).
+    #[serde(default)]
+    pub undrained_impedance: f64,
+    /// Grains wholly above the pack top at the step (they left the pack while it settled).
+    #[serde(default)]
+    pub escaped_grains: usize,
 }
 
 impl Prediction {
@@ -340,6 +361,37 @@ pub struct TerzaghiState {
     /// The radiating top's state (`drained_top = "radiating"`).
     #[serde(default)]
     radiating: Option<RadiatingSide>,
+    /// The absorbing load's state (`load_dashpot`).
+    #[serde(default)]
+    dashpot: Option<LoadDashpot>,
+}
+
+/// A matched dashpot on the loaded layer ([`TerzaghiSection::load_dashpot`]).
+#[derive(Clone, Debug, Serialize, Deserialize)]
+struct LoadDashpot {
+    /// Each loaded grain's coefficient c_i (force per velocity), in the order of `loaded`: its share of c.
+    coefficients: Vec<f64>,
+    /// Running mean v̄ of the layer's vertical velocity.
+    mean: f64,
+    /// Rate of the running mean per fluid step.
+    rate: f64,
+}
+
+impl LoadDashpot {
+    /// The layer's vertical velocity (the grains' mean weighted by their coefficients), the running mean moved
+    /// towards it, and each loaded grain's dashpot force −c_i (v − v̄).
+    fn forces(&mut self, dem: &DemWorld<f64>, loaded: &[usize]) -> impl Iterator<Item = f64> + '_ {
+        let total: f64 = self.coefficients.iter().sum();
+        let v = loaded
+            .iter()
+            .zip(&self.coefficients)
+            .map(|(&i, c)| c * dem.particles[i].velocity[1])
+            .sum::<f64>()
+            / total;
+        self.mean += self.rate * (v - self.mean);
+        let dv = v - self.mean;
+        self.coefficients.iter().map(move |c| -c * dv)
+    }
 }
 
 impl Persist for TerzaghiState {}
@@ -584,6 +636,10 @@ fn start(case: &Case<Terzaghi>, exec: &Exec) -> Result<TerzaghiState> {
         diffusion_time: f64::NAN,
         dividing_surface_depth: dividing,
         drained_depth,
+        mixture_density: f64::NAN,
+        undrained_modulus: f64::NAN,
+        undrained_impedance: f64::NAN,
+        escaped_grains: 0,
     };
     let grains = world.dem.particles.len();
     let radiating = (c.drained_top.unwrap_or_default() == DrainedTop::Radiating).then(|| {
@@ -617,6 +673,50 @@ fn start(case: &Case<Terzaghi>, exec: &Exec) -> Result<TerzaghiState> {
         profiles: Vec::new(),
         snapshots: SnapshotClock::default(),
         radiating,
+        dashpot: None,
+    })
+}
+
+/// Largest c Δt / m of the absorbing load's dashpot (the loaded layer's total coefficient, fluid step and mass)
+/// accepted: an explicit dashpot is stable and first-order accurate well below 1.
+const DASHPOT_MAX_STEP: f64 = 0.5;
+
+/// The absorbing load of `factor` × the matched dashpot Z W on the layer `loaded` (shares by bounding radius,
+/// as [`DemWorld::apply_boundary_stress`] shares the load), its running mean at rest. Refused (naming
+/// `terzaghi.load_dashpot`) when the impedance is not finite and positive or the dashpot would be too stiff for
+/// the fluid step.
+fn load_dashpot(
+    factor: f64,
+    p: &Prediction,
+    dem: &DemWorld<f64>,
+    loaded: &[usize],
+    c: &TerzaghiSection,
+    u: &crate::units::LatticeUnits,
+) -> Result<LoadDashpot> {
+    let total = factor * p.undrained_impedance * c.width;
+    let mass: f64 = loaded.iter().map(|&i| dem.particles[i].mass).sum();
+    let stiffness = total * u.timestep / mass;
+    if !(total.is_finite() && total > 0.0 && stiffness <= DASHPOT_MAX_STEP) {
+        return Err(LbdemError::field(
+            "terzaghi.load_dashpot",
+            factor,
+            &format!(
+                "gives a dashpot c = {total:.4e} on the loaded layer (undrained impedance {:.4e}, M_u {:.4e}, mixture                  density {:.4e}) with c dt/m = {stiffness:.3e}: not a stable explicit dashpot (at most                  {DASHPOT_MAX_STEP})",
+                p.undrained_impedance, p.undrained_modulus, p.mixture_density
+            ),
+            "lower terzaghi.load_dashpot (1 is the matched dashpot), or shorten fluid.timestep",
+        ));
+    }
+    let radii: Vec<f64> = loaded
+        .iter()
+        .map(|&i| dem.particles[i].shape.bounding_radius())
+        .collect();
+    let sum: f64 = radii.iter().sum();
+    let crossing_steps = c.height / u.sound_speed / u.timestep;
+    Ok(LoadDashpot {
+        coefficients: radii.iter().map(|r| total * r / sum).collect(),
+        mean: 0.0,
+        rate: (1.0 / (RADIATING_CROSSINGS * crossing_steps)).min(1.0),
     })
 }
 
@@ -701,6 +801,27 @@ impl TerzaghiState {
             p.consolidation_coefficient =
                 consolidation_coefficient(p.permeability, u.density * u.viscosity, p.storage);
             p.diffusion_time = p.thickness * p.thickness / p.consolidation_coefficient;
+            // The column's undrained impedance: fluid everywhere plus the excess mass of the grains in it (a
+            // grain wholly above the pack top left it while it settled: not part of the column).
+            let top = p.thickness;
+            let (excess, escaped) = self.world.dem.particles.iter().fold((0.0, 0), |(m, n), g| {
+                if g.position[1] - g.shape.bounding_radius() > top {
+                    (m, n + 1)
+                } else {
+                    (m + g.mass - u.density * g.shape.area(), n)
+                }
+            });
+            p.escaped_grains = escaped;
+            if escaped > 0 {
+                eprintln!(
+                    "lbdem: WARNING: terzaghi: {escaped} grain(s) left the pack while it settled (wholly above its top \
+                     at the step): they are not part of the column and drift off in the snapshots; another \
+                     terzaghi.seed packs a column without"
+                );
+            }
+            p.mixture_density = u.density + excess / (c.width * p.thickness);
+            p.undrained_modulus = p.drained_modulus / (1.0 - p.loading_efficiency);
+            p.undrained_impedance = (p.undrained_modulus * p.mixture_density).sqrt();
             // Terzaghi's diffusion describes the column only when sound crosses it much faster than pressure
             // diffuses (the model: the fracture kind's warning).
             let regime = p.diffusion_time / p.sound_crossing_time;
@@ -742,6 +863,16 @@ impl TerzaghiState {
             for &i in &self.loaded {
                 self.world.applied[i] = self.after[i];
             }
+            if let Some(factor) = c.load_dashpot {
+                self.dashpot = Some(load_dashpot(
+                    factor,
+                    &self.prediction,
+                    &self.world.dem,
+                    &self.loaded,
+                    c,
+                    u,
+                )?);
+            }
             return Ok(());
         }
         let end = ((self.s / 500 + 1) * 500).min(self.steps);
@@ -751,11 +882,26 @@ impl TerzaghiState {
             // A ramped load: the forces on the loaded layer scale with the vertical stress (they are its
             // shares by radius, `DemWorld::apply_boundary_stress`), evaluated at the middle of the step.
             let t_mid = (s as f64 - 0.5) * u.timestep;
-            if ramp > 0.0 && t_mid < ramp + u.timestep {
+            let scale = if ramp > 0.0 && t_mid < ramp + u.timestep {
                 let r = (0.5 * std::f64::consts::PI * (t_mid / ramp).min(1.0))
                     .sin()
                     .powi(2);
-                let scale = (c.isotropic_stress + load * r) / (c.isotropic_stress + load);
+                Some((c.isotropic_stress + load * r) / (c.isotropic_stress + load))
+            } else {
+                None
+            };
+            if let Some(d) = &mut self.dashpot {
+                // The load (ramped or not) plus the dashpot, from the velocities at the start of the step.
+                let scale = scale.unwrap_or(1.0);
+                for (&i, f) in self
+                    .loaded
+                    .iter()
+                    .zip(d.forces(&self.world.dem, &self.loaded))
+                {
+                    let (base, m) = self.after[i];
+                    self.world.applied[i] = (base * scale + vector(0.0, f), m);
+                }
+            } else if let Some(scale) = scale {
                 for &i in &self.loaded {
                     let (f, m) = self.after[i];
                     self.world.applied[i] = (f * scale, m);
@@ -1027,6 +1173,21 @@ impl Kind for Terzaghi {
         }
         if let Some(f) = c.free_layer {
             positive("terzaghi.free_layer", f, "free fluid above the pack")?;
+        }
+        if let Some(f) = c.load_dashpot {
+            positive(
+                "terzaghi.load_dashpot",
+                f,
+                "multiple of the matched dashpot",
+            )?;
+            if f > 10.0 {
+                return Err(LbdemError::field(
+                    "terzaghi.load_dashpot",
+                    f,
+                    "is more than 10 times the matched dashpot: the loaded surface would be all but held",
+                    "use 1 (the matched dashpot, which absorbs the undrained wave) or leave it out",
+                ));
+            }
         }
         if let Some(r) = c.load_ramp {
             positive("terzaghi.load_ramp", r, "time over which the load rises")?;
