@@ -164,7 +164,7 @@ fn swing(series: &[(f64, f64)]) -> f64 {
 /// overshoots γσ₀ by 30 % and more and swings), the matched dashpot lets it out: the base pressure rises once
 /// and then only falls (its swing beyond one rise and fall under 5 % of the plain step's; measured 0 against
 /// 0.46 γσ₀), with half or twice the matched dashpot too. What the dashpot does not fix (README): the base
-/// plateau it reveals lies 10–25 % above the predicted γσ₀.
+/// plateau it reveals lies 4–17 % above the predicted γσ₀.
 #[test]
 fn a_matched_dashpot_on_the_load_absorbs_the_undrained_wave() {
     let run = |dashpot: Option<f64>| {
