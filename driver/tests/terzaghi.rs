@@ -64,6 +64,22 @@ fn independent_measurements_predict_the_consolidation_coefficient_of_a_random_pa
         "dividing surface {}",
         p.dividing_surface_depth
     );
+    // The settlement of the loaded layer follows Terzaghi's (the undrained part at once, then γσ₀L/K_v × U(T))
+    // within 5 % of the final settlement σ₀L/K_v in RMS over the compared records (measured 3.6 % here, 2.1 %
+    // on the bundled column), and the skeleton's modulus in the wet column late in the run, the effective stress
+    // σ₀ − p integrated over the column over the settlement, is the dry K_v within 5 % (+1.3 % here, +0.7 %
+    // on the bundled column): two checks of the skeleton's part that do not use the pore-pressure comparison.
+    assert!(
+        c.settlement_rms_over_final < 0.05,
+        "settlement RMS {} of the final settlement",
+        c.settlement_rms_over_final
+    );
+    assert!(
+        (c.wet_modulus_late / p.drained_modulus - 1.0).abs() < 0.05,
+        "wet modulus {} against the dry {}",
+        c.wet_modulus_late,
+        p.drained_modulus
+    );
     // The drained top stays at zero (the Zou–He boundary above the free layer holds P = 0).
     let last = profiles.last().unwrap();
     let top = last.rows.iter().find(|r| r[0] < 0.02).unwrap();

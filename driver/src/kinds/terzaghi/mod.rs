@@ -10,8 +10,8 @@ use lbdem_kernels::fluid::lattice::Side;
 use lbdem_kernels::fluid::step::FluidParams;
 use lbdem_kernels::math::{vector, Vector};
 use lbdem_reference::poroelastic::{
-    biot_modulus, consolidation_coefficient, constrained_modulus, loading_efficiency,
-    storage_terms, terzaghi_pressure_ramped, uniaxial_storage,
+    biot_modulus, consolidation_coefficient, constrained_modulus, degree_of_consolidation,
+    loading_efficiency, storage_terms, terzaghi_pressure_ramped, uniaxial_storage,
 };
 use serde::{Deserialize, Serialize};
 
@@ -281,6 +281,19 @@ pub struct Prediction {
 }
 
 impl Prediction {
+    /// Terzaghi's settlement of the column at `time` after a step `load`: the undrained part (1 − γ)σ₀L/K_v at
+    /// once, then γσ₀L/K_v × U(c_v t/L²) ([`degree_of_consolidation`]). NaN for a drained depth or a ramp (not
+    /// derived here).
+    pub fn settlement(&self, load: f64, time: f64, ramp: f64) -> f64 {
+        if self.drained_depth != 0.0 || ramp > 0.0 {
+            return f64::NAN;
+        }
+        let l = self.thickness;
+        let final_settlement = load * l / self.drained_modulus;
+        let u = degree_of_consolidation(self.consolidation_coefficient * time / (l * l));
+        final_settlement * ((1.0 - self.loading_efficiency) + self.loading_efficiency * u)
+    }
+
     /// γ × Terzaghi's solution (for the loading of the scene: a step, or the ramp `ramp`) at `depth` below
     /// the pack top and time `time`: a column of length L − d drained at depth d (zero pressure above it).
     pub fn pressure_over_load(&self, depth: f64, time: f64, ramp: f64) -> f64 {
@@ -309,6 +322,25 @@ pub struct Profile {
     /// Σ over the column's nodes of the excess density / Σ over its rows of (nodes × the fluid-only excess):
     /// the fraction of the lattice that stores fluid at the pore pressure (diagnostic of the storage term).
     pub stored_fraction: f64,
+    /// Settlement of the loaded layer since the step (its grains' mean height, weighted by their shares of the
+    /// load, at the step minus now; positive downwards).
+    #[serde(default)]
+    pub settlement: f64,
+}
+
+impl Profile {
+    /// The skeleton's constrained modulus in the wet column at this record: the effective stress σ₀ − p
+    /// integrated over the column's rows (spacing `h`, p from this record) over the settlement, σ₀ = `load`.
+    /// Under uniaxial strain the settlement is the integral of the strain (σ₀ − p)/K_v, so this is K_v where the
+    /// skeleton is uniform; NaN before the layer has moved.
+    pub fn wet_modulus(&self, load: f64, h: f64) -> f64 {
+        let effective: f64 = self.rows.iter().map(|r| load * (1.0 - r[1]) * h).sum();
+        if self.settlement > 0.0 {
+            effective / self.settlement
+        } else {
+            f64::NAN
+        }
+    }
 }
 
 /// What the comparison with Terzaghi's solution gives.
@@ -336,6 +368,14 @@ pub struct Comparison {
     pub stored_fraction_early: f64,
     /// At the last record.
     pub stored_fraction_late: f64,
+    /// The wet skeleton's constrained modulus ([`Profile::wet_modulus`]) at the first record after the start-up,
+    /// against the dry K_v the prediction uses.
+    pub wet_modulus_early: f64,
+    /// At the last record still holding a tenth of γσ₀ on average.
+    pub wet_modulus_late: f64,
+    /// RMS over the compared records of the loaded layer's settlement minus Terzaghi's
+    /// ([`Prediction::settlement`]), over the final settlement σ₀L/K_v (NaN with a ramp or a drained depth).
+    pub settlement_rms_over_final: f64,
 }
 
 /// The run state.
@@ -364,6 +404,22 @@ pub struct TerzaghiState {
     /// The absorbing load's state (`load_dashpot`).
     #[serde(default)]
     dashpot: Option<LoadDashpot>,
+    /// Height of the loaded layer at the step (its grains' mean, weighted by their shares of the load).
+    #[serde(default)]
+    layer_start: Option<f64>,
+}
+
+/// Height of the loaded layer: its grains' mean height weighted by bounding radius (their shares of the load,
+/// [`DemWorld::apply_boundary_stress`]).
+fn layer_height(dem: &DemWorld<f64>, loaded: &[usize]) -> f64 {
+    let (mut sum, mut w) = (0.0, 0.0);
+    for &i in loaded {
+        let g = &dem.particles[i];
+        let r = g.shape.bounding_radius();
+        sum += r * g.position[1];
+        w += r;
+    }
+    sum / w
 }
 
 /// A matched dashpot on the loaded layer ([`TerzaghiSection::load_dashpot`]).
@@ -676,6 +732,7 @@ fn start(case: &Case<Terzaghi>, exec: &Exec) -> Result<TerzaghiState> {
         snapshots: SnapshotClock::default(),
         radiating,
         dashpot: None,
+        layer_start: None,
     })
 }
 
@@ -862,6 +919,7 @@ impl TerzaghiState {
             for &i in &self.loaded {
                 self.world.applied[i] = self.after[i];
             }
+            self.layer_start = Some(layer_height(&self.world.dem, &self.loaded));
             if let Some(factor) = c.load_dashpot {
                 self.dashpot = Some(load_dashpot(
                     factor,
@@ -931,10 +989,14 @@ impl TerzaghiState {
                     let depth = self.prediction.thickness - (y as f64 + 0.5) * u.spacing;
                     out.push([depth, finite("pore pressure", p, s, HINT)?]);
                 }
+                let settlement = self.layer_start.map_or(f64::NAN, |y0| {
+                    y0 - layer_height(&self.world.dem, &self.loaded)
+                });
                 self.profiles.push(Profile {
                     time: s as f64 * u.timestep,
                     rows: out,
                     stored_fraction: all / pore,
+                    settlement,
                 });
             }
         }
@@ -943,7 +1005,7 @@ impl TerzaghiState {
     }
 
     /// The comparison of the profiles after the start-up with Terzaghi's solution (γ and c_v predicted).
-    pub fn comparison(&self, radius_max: f64, ramp: f64) -> Comparison {
+    pub fn comparison(&self, radius_max: f64, ramp: f64, load: f64, h: f64) -> Comparison {
         let p = &self.prediction;
         let (gamma, cv, l, d0) = (
             p.loading_efficiency,
@@ -990,18 +1052,27 @@ impl TerzaghiState {
             (f64::NAN, f64::NAN, 0)
         };
         let first = self.profiles.iter().find(|r| r.time > t0);
+        // The last record still holding a tenth of γσ₀ on average (later, the ratio of two vanishing
+        // excesses means nothing).
+        let late = self.profiles.iter().rfind(|r| {
+            let m = r.rows.iter().map(|d| d[1]).sum::<f64>() / r.rows.len().max(1) as f64;
+            m > 0.1 * gamma
+        });
+        // The settlement against Terzaghi's over the same records, over the final settlement σ₀L/K_v.
+        let final_settlement = load * l / p.drained_modulus;
+        let after: Vec<&Profile> = self.profiles.iter().filter(|r| r.time > t0).collect();
+        let settlement_rms = (after
+            .iter()
+            .map(|r| ((r.settlement - p.settlement(load, r.time, ramp)) / final_settlement).powi(2))
+            .sum::<f64>()
+            / after.len().max(1) as f64)
+            .sqrt();
         Comparison {
             stored_fraction_early: first.map_or(f64::NAN, |r| r.stored_fraction),
-            // The last record still holding a tenth of γσ₀ on average (later, the ratio of two vanishing
-            // excesses means nothing).
-            stored_fraction_late: self
-                .profiles
-                .iter()
-                .rfind(|r| {
-                    let m = r.rows.iter().map(|d| d[1]).sum::<f64>() / r.rows.len().max(1) as f64;
-                    m > 0.1 * gamma
-                })
-                .map_or(f64::NAN, |r| r.stored_fraction),
+            stored_fraction_late: late.map_or(f64::NAN, |r| r.stored_fraction),
+            wet_modulus_early: first.map_or(f64::NAN, |r| r.wet_modulus(load, h)),
+            wet_modulus_late: late.map_or(f64::NAN, |r| r.wet_modulus(load, h)),
+            settlement_rms_over_final: settlement_rms,
             records,
             samples: n,
             rms_over_gamma_load: rms,
@@ -1044,6 +1115,8 @@ fn outcome(case: &Case<Terzaghi>, state: &TerzaghiState) -> TerzaghiOutcome {
         comparison: state.comparison(
             case.scene.terzaghi.radius_max,
             case.scene.terzaghi.load_ramp.unwrap_or(0.0),
+            case.scene.terzaghi.load,
+            case.setup.units.spacing,
         ),
     }
 }
@@ -1377,7 +1450,21 @@ impl Kind for Terzaghi {
             &["time", "depth", "pressure_over_load", "terzaghi_over_load"],
             rows,
         );
-        write_atomic(&dir.join("profiles.csv"), table.as_bytes())
+        write_atomic(&dir.join("profiles.csv"), table.as_bytes())?;
+        let (load, h) = (case.scene.terzaghi.load, case.setup.units.spacing);
+        let rows = state.profiles.iter().map(|r| {
+            let theory = if p.consolidation_coefficient.is_finite() {
+                p.settlement(load, r.time, ramp)
+            } else {
+                f64::NAN
+            };
+            vec![r.time, r.settlement, theory, r.wet_modulus(load, h)]
+        });
+        let table = csv(
+            &["time", "settlement", "terzaghi_settlement", "wet_modulus"],
+            rows,
+        );
+        write_atomic(&dir.join("settlement.csv"), table.as_bytes())
     }
 
     fn results(case: &Case<Self>, state: &TerzaghiState) -> Result<serde_json::Value> {
