@@ -278,6 +278,23 @@ pub struct Prediction {
     /// Grains wholly above the pack top at the step (they left the pack while it settled).
     #[serde(default)]
     pub escaped_grains: usize,
+    /// Permeability of the lower half of the pack in the Darcy run: ν q over the least-squares pressure
+    /// gradient of its fluid-only row means (the column's heterogeneity; the prediction uses `permeability`).
+    #[serde(default)]
+    pub permeability_lower_half: f64,
+    /// The same for the upper half.
+    #[serde(default)]
+    pub permeability_upper_half: f64,
+}
+
+/// Least-squares slope of y against x (NaN for fewer than two distinct x).
+fn least_squares_slope(pts: &[(f64, f64)]) -> f64 {
+    let n = pts.len() as f64;
+    let mx = pts.iter().map(|p| p.0).sum::<f64>() / n;
+    let my = pts.iter().map(|p| p.1).sum::<f64>() / n;
+    let sxy: f64 = pts.iter().map(|p| (p.0 - mx) * (p.1 - my)).sum();
+    let sxx: f64 = pts.iter().map(|p| (p.0 - mx).powi(2)).sum();
+    sxy / sxx
 }
 
 impl Prediction {
@@ -698,6 +715,8 @@ fn start(case: &Case<Terzaghi>, exec: &Exec) -> Result<TerzaghiState> {
         undrained_modulus: f64::NAN,
         undrained_impedance: f64::NAN,
         escaped_grains: 0,
+        permeability_lower_half: f64::NAN,
+        permeability_upper_half: f64::NAN,
     };
     let grains = world.dem.particles.len();
     let radiating = (c.drained_top.unwrap_or_default() == DrainedTop::Radiating).then(|| {
@@ -839,8 +858,22 @@ impl TerzaghiState {
             }
             let storage_porosity = all / pore;
             let k = permeability(u.lattice_viscosity, self.flow.flux, pr as f64, drop);
+            // The column's heterogeneity: the permeability of each half of the pack from the least-squares
+            // gradient of its fluid-only row means (Darcy's law locally), against the end-to-end k.
+            let half = |lo: usize, hi: usize| {
+                let pts: Vec<(f64, f64)> = rows
+                    .iter()
+                    .filter(|r| r.0 >= lo && r.0 < hi)
+                    .map(|r| (r.0 as f64, CS2 * r.1))
+                    .collect();
+                let slope = least_squares_slope(&pts);
+                u.permeability_to_physical(u.lattice_viscosity * self.flow.flux / -slope)
+            };
+            let (k_lower, k_upper) = (half(fr, fr + pr / 2), half(fr + pr / 2, fr + pr));
             let p = &mut self.prediction;
             p.permeability = u.permeability_to_physical(k);
+            p.permeability_lower_half = k_lower;
+            p.permeability_upper_half = k_upper;
             p.darcy_steps = self.flow.steps;
             p.storage_porosity = storage_porosity;
             let n = if c.storage_porosity_measured {
