@@ -210,6 +210,8 @@ const HEADER_ONLY_AT_THE_HOLD: &[(&str, &str)] = &[
     ("pressure_diffusion", "profiles.csv"),
     // Profiles are recorded from the load step on, after the Darcy run, which step 3000 is in.
     ("terzaghi", "profiles.csv"),
+    // Its settlement is recorded with the profiles.
+    ("terzaghi", "settlement.csv"),
     // Events: a row per broken bond; none has broken by the hold.
     ("dry", "broken_bonds.csv"),
     ("fracture", "breaks.csv"),
