@@ -387,6 +387,27 @@ fn needle_grains_are_refused_naming_terzaghi_aspect_ratio() {
     }
 }
 
+/// A pack that does not hold together when its top platen is removed (a 2.4 × 4.8 cm column of seed 8: 53 of
+/// its 296 grains fly off) is refused naming `terzaghi.seed` before the Darcy run; it used to run on and predict
+/// from what was left (K_v 35× the bundled column's, γ = 0.02). The bundled pack, which loses 2 of 77, runs
+/// with a warning (`prediction.escaped_grains`).
+#[test]
+fn a_pack_that_falls_apart_without_its_top_platen_is_refused_naming_the_seed() {
+    let mut s = scene();
+    s.terzaghi.width = 2.4;
+    s.terzaghi.height = 4.8;
+    s.terzaghi.seed = 8;
+    let e = match terzaghi::simulate(&Case::<Terzaghi>::new(s).unwrap()) {
+        Ok((o, _)) => panic!(
+            "ran with {} grains outside the column",
+            o.prediction.escaped_grains
+        ),
+        Err(e) => e.to_string(),
+    };
+    assert!(e.contains("terzaghi.seed"), "{e}");
+    assert!(e.contains("does not hold together"), "{e}");
+}
+
 /// A pack that rearranges under the dry step instead of straining elastically is refused naming the load,
 /// never measured: this 4.8 cm column of frictionless discs (seed 7) reaches the isotropic stress but
 /// collapses by 43 % under the step, which gave a drained modulus 120× too soft, γ = 0.99 and an RMS of 90 %
