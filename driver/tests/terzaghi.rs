@@ -96,6 +96,18 @@ fn independent_measurements_predict_the_consolidation_coefficient_of_a_random_pa
     assert!(top[1].abs() < 1e-2 * p.loading_efficiency);
 }
 
+/// Two runs measured the same column before the step: the same c_v and γ, to the bit.
+fn same_prediction(a: &terzaghi::Prediction, b: &terzaghi::Prediction) {
+    assert_eq!(
+        a.consolidation_coefficient.to_bits(),
+        b.consolidation_coefficient.to_bits()
+    );
+    assert_eq!(
+        a.loading_efficiency.to_bits(),
+        b.loading_efficiency.to_bits()
+    );
+}
+
 /// A radiating drained top (`drained_top = "radiating"`: sound leaves through the lattice's top side as into a
 /// large reservoir, slow flow still sees the reservoir pressure) against the pressure side, on the short
 /// column, side by side: the measurements before the step are the same bits (the top does not touch them),
@@ -123,14 +135,7 @@ fn a_radiating_top_changes_only_the_start_up_and_brings_it_closer_to_terzaghi() 
         "radiating {c:#?}
 pressure side {cm:#?}"
     );
-    assert_eq!(
-        p.consolidation_coefficient.to_bits(),
-        mirror.prediction.consolidation_coefficient.to_bits()
-    );
-    assert_eq!(
-        p.loading_efficiency.to_bits(),
-        mirror.prediction.loading_efficiency.to_bits()
-    );
+    same_prediction(p, &mirror.prediction);
     let (mut sum, mut n) = (0.0, 0usize);
     for (a, b) in pm.iter().zip(&pr).filter(|(a, _)| a.time >= 1.0) {
         assert_eq!(a.time, b.time);
@@ -205,14 +210,7 @@ fn a_matched_dashpot_on_the_load_absorbs_the_undrained_wave() {
         h.map(|h| h.join().unwrap())
     });
     let p = &matched.prediction;
-    assert_eq!(
-        p.consolidation_coefficient.to_bits(),
-        plain.prediction.consolidation_coefficient.to_bits()
-    );
-    assert_eq!(
-        p.loading_efficiency.to_bits(),
-        plain.prediction.loading_efficiency.to_bits()
-    );
+    same_prediction(p, &plain.prediction);
     // The impedance from the measured modulus and the predicted γ, as documented.
     let m_u = p.drained_modulus / (1.0 - p.loading_efficiency);
     assert_eq!(p.undrained_modulus.to_bits(), m_u.to_bits());
@@ -420,6 +418,17 @@ fn needle_grains_are_refused_naming_terzaghi_aspect_ratio() {
     }
 }
 
+/// The error a scene's run stops with (it must stop: a run that goes through fails the test, with what it measured).
+fn refusal(s: TerzaghiScene) -> String {
+    match terzaghi::simulate(&Case::<Terzaghi>::new(s).unwrap()) {
+        Ok((o, _)) => panic!(
+            "ran without refusing: {} grains outside the column, dry strain {:.3e}",
+            o.prediction.escaped_grains, o.prediction.dry_strain
+        ),
+        Err(e) => e.to_string(),
+    }
+}
+
 /// A pack that does not hold together when its top platen is removed is refused naming `terzaghi.seed` before
 /// the Darcy run: the bundled scene's grains in a 4.8 cm column (seed 7) lose 30 of 152 grains, which left a pack
 /// that collapsed by 43 % under the dry step (a drained modulus 120× too soft, γ = 0.99 and an RMS of 90 % before
@@ -430,13 +439,7 @@ fn needle_grains_are_refused_naming_terzaghi_aspect_ratio() {
 fn a_pack_that_falls_apart_without_its_top_platen_is_refused_naming_the_seed() {
     let mut s = scene();
     s.terzaghi.height = 4.8;
-    let e = match terzaghi::simulate(&Case::<Terzaghi>::new(s).unwrap()) {
-        Ok((o, _)) => panic!(
-            "ran with {} grains outside the column",
-            o.prediction.escaped_grains
-        ),
-        Err(e) => e.to_string(),
-    };
+    let e = refusal(s);
     assert!(e.contains("terzaghi.seed"), "{e}");
     assert!(e.contains("does not hold together"), "{e}");
     assert!(e.contains("30 of 152"), "{e}");
@@ -450,13 +453,7 @@ fn a_pack_that_collapses_under_the_dry_step_is_refused_naming_the_load() {
     let mut s = scene();
     s.terzaghi.load = 45.0;
     s.fluid.timestep = Some(1e-4);
-    let e = match terzaghi::simulate(&Case::<Terzaghi>::new(s).unwrap()) {
-        Ok((o, _)) => panic!(
-            "measured a dry strain of {:.3e} without refusing",
-            o.prediction.dry_strain
-        ),
-        Err(e) => e.to_string(),
-    };
+    let e = refusal(s);
     assert!(e.contains("terzaghi.load"), "{e}");
     assert!(e.contains("rearranged the pack"), "{e}");
 }
