@@ -159,9 +159,47 @@ pub fn degree_of_consolidation(time_factor: f64) -> f64 {
     1.0 - s
 }
 
+/// Terzaghi's settlement of a column of thickness `l` (drained modulus `k_v`, loading efficiency `gamma`,
+/// consolidation coefficient `c_v`) at time `t` after a step `load` σ₀ (Terzaghi 1943; Wang 2000 §6.2): the
+/// undrained part (1 − γ)σ₀L/K_v at once, then the drained rest γσ₀L/K_v in proportion to the degree of
+/// consolidation U(c_v t/L²) ([`degree_of_consolidation`]); σ₀L/K_v at the end.
+pub fn terzaghi_settlement(load: f64, l: f64, k_v: f64, gamma: f64, c_v: f64, t: f64) -> f64 {
+    let final_settlement = load * l / k_v;
+    let u = degree_of_consolidation(c_v * t / (l * l));
+    final_settlement * ((1.0 - gamma) + gamma * u)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn settlement_goes_from_the_undrained_to_the_drained_strain() {
+        let (load, l, kv, gamma, cv) = (5.0, 2.4, 1392.0, 0.42, 0.6);
+        let drained = load * l / kv;
+        // At the step: the skeleton's share (1 − γ) of the load, its strain over the column.
+        assert!(
+            (terzaghi_settlement(load, l, kv, gamma, cv, 0.0) / drained - (1.0 - gamma)).abs()
+                < 2e-3
+        );
+        // Late: the whole load on the skeleton.
+        assert!(
+            (terzaghi_settlement(load, l, kv, gamma, cv, 50.0 * l * l / cv) / drained - 1.0).abs()
+                < 1e-12
+        );
+        // Early: U = 2√(T/π) (the semi-infinite column; Terzaghi 1943), to O(T) corrections only exponentially small.
+        let t = 0.01 * l * l / cv;
+        let u = (terzaghi_settlement(load, l, kv, gamma, cv, t) / drained - (1.0 - gamma)) / gamma;
+        assert!(
+            (u - 2.0 * (0.01f64 / std::f64::consts::PI).sqrt()).abs() < 1e-6,
+            "{u}"
+        );
+        // Monotone in time.
+        let s: Vec<f64> = (0..50)
+            .map(|k| terzaghi_settlement(load, l, kv, gamma, cv, 0.1 * k as f64))
+            .collect();
+        assert!(s.windows(2).all(|w| w[1] >= w[0]));
+    }
 
     #[test]
     fn incompressible_constituents_reduce_to_terzaghi() {

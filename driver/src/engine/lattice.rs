@@ -1800,15 +1800,20 @@ impl<T: Real> FluidLattice<T> {
                 1..n.saturating_sub(1)
             }
         };
-        let nodes: Vec<(usize, usize)> = match side {
-            Side::North => along(nx, periodic[0]).map(|x| (x, ny - 1)).collect(),
-            Side::South => along(nx, periodic[0]).map(|x| (x, 0)).collect(),
-            Side::East => along(ny, periodic[1]).map(|y| (nx - 1, y)).collect(),
-            Side::West => along(ny, periodic[1]).map(|y| (0, y)).collect(),
+        // Node k along the side (no list: this runs at every step of a radiating side).
+        let range = match side {
+            Side::North | Side::South => along(nx, periodic[0]),
+            Side::East | Side::West => along(ny, periodic[1]),
+        };
+        let node = |k: usize| match side {
+            Side::North => (k, ny - 1),
+            Side::South => (k, 0),
+            Side::East => (nx - 1, k),
+            Side::West => (0, k),
         };
         let profiles = side_profiles(&self.profiles);
         let (mut sum, mut count) = (0.0, 0usize);
-        for (x, y) in nodes {
+        for (x, y) in range.map(node) {
             if self.flags[self.shape.index(x, y)] == SOLID {
                 continue;
             }

@@ -10,8 +10,8 @@ use lbdem_kernels::fluid::lattice::Side;
 use lbdem_kernels::fluid::step::FluidParams;
 use lbdem_kernels::math::{vector, Vector};
 use lbdem_reference::poroelastic::{
-    biot_modulus, consolidation_coefficient, constrained_modulus, degree_of_consolidation,
-    loading_efficiency, storage_terms, terzaghi_pressure_ramped, uniaxial_storage,
+    biot_modulus, consolidation_coefficient, constrained_modulus, loading_efficiency,
+    storage_terms, terzaghi_pressure_ramped, terzaghi_settlement, uniaxial_storage,
 };
 use serde::{Deserialize, Serialize};
 
@@ -25,7 +25,7 @@ use crate::engine::lattice::{FluidLattice, RadiatingSide};
 use crate::error::{non_negative, positive, LbdemError, Result};
 use crate::input::limits::{self, Budget};
 use crate::observe::darcy::{permeability, SteadyFlow};
-use crate::observe::fit::fit_consolidation;
+use crate::observe::fit::{fit_consolidation, linear_fit};
 use crate::observe::flow::{dividing_surface_depth, fluid_row_means};
 use crate::observe::health::{coupled_health, finite};
 use crate::observe::steady::Steadiness;
@@ -300,16 +300,6 @@ fn escaped_grains(dem: &DemWorld<f64>, top: f64) -> usize {
     dem.particles.iter().filter(|g| above(g, top)).count()
 }
 
-/// Least-squares slope of y against x (NaN for fewer than two distinct x).
-fn least_squares_slope(pts: &[(f64, f64)]) -> f64 {
-    let n = pts.len() as f64;
-    let mx = pts.iter().map(|p| p.0).sum::<f64>() / n;
-    let my = pts.iter().map(|p| p.1).sum::<f64>() / n;
-    let sxy: f64 = pts.iter().map(|p| (p.0 - mx) * (p.1 - my)).sum();
-    let sxx: f64 = pts.iter().map(|p| (p.0 - mx).powi(2)).sum();
-    sxy / sxx
-}
-
 impl Prediction {
     /// Terzaghi's settlement of the column at `time` after a step `load`: the undrained part (1 − γ)σ₀L/K_v at
     /// once, then γσ₀L/K_v × U(c_v t/L²) ([`degree_of_consolidation`]). NaN for a drained depth or a ramp (not
@@ -318,10 +308,14 @@ impl Prediction {
         if self.drained_depth != 0.0 || ramp > 0.0 {
             return f64::NAN;
         }
-        let l = self.thickness;
-        let final_settlement = load * l / self.drained_modulus;
-        let u = degree_of_consolidation(self.consolidation_coefficient * time / (l * l));
-        final_settlement * ((1.0 - self.loading_efficiency) + self.loading_efficiency * u)
+        terzaghi_settlement(
+            load,
+            self.thickness,
+            self.drained_modulus,
+            self.loading_efficiency,
+            self.consolidation_coefficient,
+            time,
+        )
     }
 
     /// γ × Terzaghi's solution (for the loading of the scene: a step, or the ramp `ramp`) at `depth` below
@@ -896,7 +890,7 @@ impl TerzaghiState {
                     .filter(|r| r.0 >= lo && r.0 < hi)
                     .map(|r| (r.0 as f64, CS2 * r.1))
                     .collect();
-                let slope = least_squares_slope(&pts);
+                let (slope, _, _) = linear_fit(&pts);
                 u.permeability_to_physical(u.lattice_viscosity * self.flow.flux / -slope)
             };
             let (k_lower, k_upper) = (half(fr, fr + pr / 2), half(fr + pr / 2, fr + pr));
