@@ -82,6 +82,10 @@ const HINT_LAMBDA: &str =
                            of free grains diverged at high tau, the sooner the lighter the grains), or use \
                            solid_operator = \"linearized_non_equilibrium_bounce_back\"";
 
+mod sealed;
+pub use sealed::SealedMeasurement;
+use sealed::SealedRun;
+
 /// The default fluid collision and the solid operator of a Terzaghi scene: without `terzaghi.solid_operator`,
 /// Ω₁ₗ with BGK (the operator its README tables were measured with). TRT + ΩΛ, the free-grain kinds' default,
 /// was tried on the bundled scene (issue 11): it first diverged inside the pack (rock grains, τ = 0.8, where
@@ -187,6 +191,11 @@ pub struct TerzaghiSection {
     /// 1 % of the bundled scene's load at 1 s). 1 is the matched dashpot; absent: none.
     #[serde(default)]
     pub load_dashpot: Option<f64>,
+    /// Measure the undrained response of the column sealed, with its grains free, before the drained run
+    /// (`prediction.sealed`; [`SealedMeasurement`]): a copy of the column whose top is a lid moving with the
+    /// loaded layer takes the step load for 20 sound-crossing times. Default false.
+    #[serde(default)]
+    pub sealed_check: bool,
 }
 
 /// The lattice's top side above the free fluid layer.
@@ -249,6 +258,10 @@ pub struct Prediction {
     /// grains (then K_v describes the rearrangement, not the skeleton the wet column loads).
     #[serde(default = "nan")]
     pub dry_recovery: f64,
+    /// The sealed column's undrained response (`sealed_check = true`), else absent (left out of
+    /// `summary.json`; kept in checkpoints, whose binary format needs every field).
+    #[serde(default)]
+    pub sealed: Option<SealedMeasurement>,
     /// Porosity the fluid sees, 1 − ⟨ε⟩ over the column.
     pub porosity: f64,
     /// Storage porosity of the lattice: the fraction of the column's nodes whose fluid stores at the pore
@@ -452,6 +465,9 @@ pub struct TerzaghiState {
     /// Height of the loaded layer at the step (its grains' mean, weighted by their shares of the load).
     #[serde(default)]
     layer_start: Option<f64>,
+    /// The sealed column (`sealed_check`), run after the Darcy run and before the drained one.
+    #[serde(default)]
+    sealed: Option<SealedRun>,
 }
 
 /// Height of the loaded layer: its grains' mean height weighted by bounding radius (their shares of the load,
@@ -703,6 +719,38 @@ fn start(case: &Case<Terzaghi>, exec: &Exec) -> Result<TerzaghiState> {
         critical,
     )? as u32;
     let map = LatticeMap::of(u, [0.5 * h, 0.5 * h]);
+    // The sealed copy (`sealed_check`): the same grains and fluid, its top a lid (a velocity side).
+    let sealed = if c.sealed_check {
+        let mut lid = FluidLattice::<f64>::new(
+            nx,
+            ny,
+            Boundaries {
+                west: SideCondition::Wall,
+                east: SideCondition::Wall,
+                south: SideCondition::Wall,
+                north: SideCondition::VelocityProfile,
+            },
+            params,
+        )?;
+        exec.apply(&mut lid);
+        lid.set_collision(collision_of(collision)?)?;
+        lid.set_solid_operator(op);
+        lid.set_side_profile(Side::North, &vec![[0.0; 2]; nx])?;
+        let mut w = CoupledWorld::new(
+            lid,
+            dem.clone(),
+            map,
+            c.fluid_radius,
+            op.weighting(),
+            substeps,
+        )?;
+        for (i, f) in before.iter().enumerate() {
+            w.applied[i] = (*f, 0.0);
+        }
+        Some(SealedRun::new(w, thickness / u.sound_speed / u.timestep))
+    } else {
+        None
+    };
     let mut world = CoupledWorld::new(fluid, dem, map, c.fluid_radius, op.weighting(), substeps)?;
     for (i, f) in before.iter().enumerate() {
         world.applied[i] = (*f, 0.0);
@@ -776,6 +824,7 @@ fn start(case: &Case<Terzaghi>, exec: &Exec) -> Result<TerzaghiState> {
         dry_steps: step.steps,
         dry_converged: step.converged,
         dry_recovery,
+        sealed: None,
         porosity,
         storage_porosity: f64::NAN,
         permeability: f64::NAN,
@@ -831,6 +880,7 @@ fn start(case: &Case<Terzaghi>, exec: &Exec) -> Result<TerzaghiState> {
         radiating,
         dashpot: None,
         layer_start: None,
+        sealed,
     })
 }
 
@@ -1044,6 +1094,53 @@ impl TerzaghiState {
                     c,
                     u,
                 )?);
+            }
+            if let Some(run) = &mut self.sealed {
+                let d = load_dashpot(1.0, &self.prediction, &run.world.dem, &self.loaded, c, u)?;
+                run.load(d, &self.loaded);
+            }
+            return Ok(());
+        }
+        if let Some(run) = &mut self.sealed {
+            run.advance(
+                u,
+                &self.loaded,
+                &self.after,
+                c.isotropic_stress + c.load,
+                nx,
+                self.pack_rows,
+                HINT,
+            )?;
+            if run.done() {
+                let p = &self.prediction;
+                let m = run.measurement(
+                    c.load,
+                    p.thickness,
+                    self.pack_rows as f64 * u.spacing,
+                    p.fluid_compressibility,
+                    self.free_rows as f64 * u.spacing,
+                    p.drained_modulus,
+                    p.storage_porosity,
+                );
+                eprintln!(
+                    "lbdem: terzaghi: sealed column: p/sigma_0 = {:.4} (predicted {:.4} with the free layer's dead \
+                     volume {:.3e}); with the grains free: storage porosity {:.4} (Darcy, grains held: {:.4}), \
+                     undrained skeleton modulus {:.4e} (dry K_v {:.4e}); the sample's gamma {:.4} (predicted \
+                     {:.4}); pressure spread {:.1e}, drift {:.1e}",
+                    m.loading_efficiency,
+                    m.loading_efficiency_predicted,
+                    m.dead_volume,
+                    m.storage_porosity,
+                    p.storage_porosity,
+                    m.skeleton_modulus,
+                    p.drained_modulus,
+                    m.sample_loading_efficiency,
+                    p.loading_efficiency,
+                    m.pressure_spread,
+                    m.pressure_drift
+                );
+                self.prediction.sealed = Some(m);
+                self.sealed = None;
             }
             return Ok(());
         }
@@ -1443,13 +1540,14 @@ impl Kind for Terzaghi {
         b.note(format!(
             "DEM critical step {critical:.4e}: {substeps} DEM sub-step(s) per fluid step"
         ));
-        // Two lattices: the Darcy run's and the consolidation's.
+        // Two lattices: the Darcy run's and the consolidation's (three with the sealed column's).
+        let lattices = if c.sealed_check { 3 } else { 2 };
         limits::lattice(
             &mut b,
             "terzaghi.width",
             "lattices",
             nx,
-            2 * ny,
+            lattices * ny,
             8,
             limits::Solids::Covered,
         )?;
@@ -1583,6 +1681,13 @@ impl Kind for Terzaghi {
     }
 
     fn results(case: &Case<Self>, state: &TerzaghiState) -> Result<serde_json::Value> {
-        Ok(serde_json::to_value(outcome(case, state)).unwrap_or_default())
+        let mut v = serde_json::to_value(outcome(case, state)).unwrap_or_default();
+        // No sealed column: no `prediction.sealed` (a null would read as a result that is not finite).
+        if let Some(p) = v.get_mut("prediction").and_then(|p| p.as_object_mut()) {
+            if p.get("sealed").is_some_and(|s| s.is_null()) {
+                p.remove("sealed");
+            }
+        }
+        Ok(v)
     }
 }

@@ -1,0 +1,239 @@
+//! The sealed column (`[terzaghi] sealed_check = true`): the undrained response of the pack measured with its
+//! grains free, before the drained run (issue 14, item 1: the loading efficiency γ = Δp/Δσ of a sealed sample
+//! under a step load).
+//!
+//! A copy of the coupled column whose top is a lid instead of the drained reservoir: the lattice's north side
+//! is a Zou–He velocity side moving at the loaded layer's vertical velocity (as if a piston rested on the layer
+//! and sealed the free fluid layer above it), and the lid's fluid pressure is taken off the load the layer
+//! carries (the total stress σ₀ is shared by the lid, i.e. the fluid, and the grains). So no fluid leaves: the
+//! lid injects what the layer's descent makes room for, which is what a piston following the layer would push
+//! into the column. The step load then splits into a pore pressure p and an effective stress σ₀ − p, the
+//! undrained response, held (nothing drains) until measured. The matched dashpot of `load_dashpot` (factor 1)
+//! absorbs the undrained wave.
+//!
+//! Measured, averaged over the last [`SEALED_WINDOW`] of [`SEALED_CROSSINGS`] sound-crossing times: the mean
+//! pore pressure p over the pack's fluid-only row means and the layer's settlement s. The lid fills a dead
+//! volume d (the free fluid layer above the pack, per unit width) besides the pores, so with the lattice's
+//! storage β_f (n_s L + d) of the sealed fluid:
+//! * the storage porosity with the grains free, n_s' = (s/(β_f p) − d)/L (mass balance: the fluid the lid
+//!   injected, ρ₀ W s, is stored at the pressure p by the pores and the dead volume) — against the Darcy run's
+//!   n_s, measured with the grains held;
+//! * the undrained skeleton modulus K_u' = (σ₀ − p)/(s/L) — against the dry K_v;
+//! * the sample's loading efficiency without the dead volume, γ' = 1/(1 + K_u' β_f n_s') — against the
+//!   predicted γ = 1/(1 + K_v β_f n_s) (Biot α = 1, incompressible grains; Wang 2000);
+//! * and, directly, p/σ₀ against the prediction with the dead volume, 1/(1 + K_v β_f (n_s L + d)/L).
+use serde::{Deserialize, Serialize};
+
+use lbdem_kernels::fluid::lattice::Side;
+
+use super::{layer_height, LoadDashpot};
+use crate::engine::coupled::CoupledWorld;
+use crate::engine::dem::DemWorld;
+use crate::error::Result;
+use crate::observe::flow::fluid_row_means;
+use crate::observe::health::finite;
+use crate::units::{LatticeUnits, CS2};
+
+/// Length of the sealed run in sound-crossing times of the column: the matched dashpot takes the undrained
+/// wave out within a few crossings; the rest is the measurement window and a margin.
+pub const SEALED_CROSSINGS: f64 = 20.0;
+/// The measurement window: the last this many sound-crossing times of the sealed run.
+pub const SEALED_WINDOW: f64 = 8.0;
+/// Samples of the pore pressure per sound-crossing time in the window.
+const SAMPLES_PER_CROSSING: f64 = 4.0;
+
+/// What the sealed column measured (`prediction.sealed` in `summary.json`). Stresses and lengths physical.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct SealedMeasurement {
+    /// Mean pore pressure over the pack over the step load, p/σ₀ (the dead volume included).
+    pub loading_efficiency: f64,
+    /// Its prediction from K_v and the Darcy run's n_s with the dead volume, 1/(1 + K_v β_f (n_s L + d)/L).
+    pub loading_efficiency_predicted: f64,
+    /// The dead volume d the lid seals besides the pores: the free fluid layer's height.
+    pub dead_volume: f64,
+    /// Settlement of the loaded layer over the window (mean), s.
+    pub settlement: f64,
+    /// Storage porosity with the grains free, n_s' = (s/(β_f p) − d)/L (L: the pack's rows).
+    pub storage_porosity: f64,
+    /// Undrained skeleton modulus, (σ₀ − p)/(s/L).
+    pub skeleton_modulus: f64,
+    /// The sample's loading efficiency without the dead volume, 1/(1 + K_u' β_f n_s').
+    pub sample_loading_efficiency: f64,
+    /// Spread of the pack's row-mean pressures (max − min) at the end, over p. Not zero: the step leaves the
+    /// sealed column's pressure higher at the base than at the top (bundled column: 1.23 and 0.61 × the mean
+    /// after 3 crossings, 1.09 and 0.91 after 20), and it equalises only by diffusion, over L²/c_v. The mean,
+    /// which the mass balance and γ use, is steady long before ([`SealedMeasurement::pressure_drift`]).
+    pub pressure_spread: f64,
+    /// Change of the mean pressure from the window's first half to its second, over p (drift: a leak or a
+    /// creeping skeleton).
+    pub pressure_drift: f64,
+    /// Coupled steps of the sealed run.
+    pub steps: u64,
+}
+
+/// The sealed copy of the column and its sums.
+#[derive(Serialize, Deserialize)]
+pub(super) struct SealedRun {
+    pub(super) world: CoupledWorld,
+    dashpot: Option<LoadDashpot>,
+    steps: u64,
+    pub(super) s: u64,
+    window_start: u64,
+    sample_every: u64,
+    layer_start: f64,
+    /// Sums over the window's first and second halves: pressure, settlement, samples.
+    halves: [(f64, f64, u64); 2],
+    spread: f64,
+}
+
+/// The loaded layer's vertical velocity: its grains' mean weighted by bounding radius (their shares of the load).
+fn layer_velocity(dem: &DemWorld<f64>, loaded: &[usize]) -> f64 {
+    let (mut sum, mut w) = (0.0, 0.0);
+    for &i in loaded {
+        let g = &dem.particles[i];
+        let r = g.shape.bounding_radius();
+        sum += r * g.velocity[1];
+        w += r;
+    }
+    sum / w
+}
+
+impl SealedRun {
+    /// A sealed run of `world` (its north side a velocity profile at rest) lasting [`SEALED_CROSSINGS`] sound
+    /// crossings of the column (`crossing_steps` fluid steps each).
+    pub(super) fn new(world: CoupledWorld, crossing_steps: f64) -> Self {
+        let steps = (SEALED_CROSSINGS * crossing_steps).ceil().max(40.0) as u64;
+        let window = (SEALED_WINDOW * crossing_steps).ceil().max(20.0) as u64;
+        let sample_every = ((crossing_steps / SAMPLES_PER_CROSSING).floor() as u64).max(1);
+        Self {
+            world,
+            dashpot: None,
+            steps,
+            s: 0,
+            window_start: steps.saturating_sub(window),
+            sample_every,
+            layer_start: f64::NAN,
+            halves: [(0.0, 0.0, 0); 2],
+            spread: 0.0,
+        }
+    }
+
+    /// Whether the run has taken all its steps.
+    pub(super) fn done(&self) -> bool {
+        self.s >= self.steps
+    }
+
+    /// Load the sealed column (the loaded layer's forces `after`, with the matched dashpot) at its first step.
+    pub(super) fn load(&mut self, dashpot: LoadDashpot, loaded: &[usize]) {
+        self.dashpot = Some(dashpot);
+        self.layer_start = layer_height(&self.world.dem, loaded);
+    }
+
+    /// Up to 500 coupled steps. `after`: the loaded grains' forces under the step (isotropic stress + load);
+    /// `total`: that vertical stress, which the lid's pressure is a share of.
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn advance(
+        &mut self,
+        u: &LatticeUnits,
+        loaded: &[usize],
+        after: &[(lbdem_kernels::math::Vector<f64>, f64)],
+        total: f64,
+        nx: usize,
+        pack_rows: usize,
+        hint: &str,
+    ) -> Result<()> {
+        let end = (self.s + 500).min(self.steps);
+        let mut lid = vec![[0.0; 2]; nx];
+        for s in self.s + 1..=end {
+            // The lid moves with the layer; its pressure (the Zou–He density of the north side, from the
+            // populations it keeps) is taken off the layer's load.
+            let v = u.velocity_to_lattice(layer_velocity(&self.world.dem, loaded));
+            lid.fill([0.0, v]);
+            self.world.fluid.set_side_profile(Side::North, &lid)?;
+            let known = self
+                .world
+                .fluid
+                .side_known_sum(Side::North)
+                .unwrap_or(1.0 + v);
+            let p_lid = u.pressure_to_physical(CS2 * (known / (1.0 + v) - 1.0));
+            let share = 1.0 - finite("sealed lid pressure", p_lid, s, hint)? / total;
+            let dashpot: Vec<f64> = match &self.dashpot {
+                Some(d) => d.forces(&self.world.dem, loaded).collect(),
+                None => vec![0.0; loaded.len()],
+            };
+            for (&i, f) in loaded.iter().zip(dashpot) {
+                let (base, m) = after[i];
+                self.world.applied[i] = (base * share + lbdem_kernels::math::vector(0.0, f), m);
+            }
+            self.world.step();
+            if s > self.window_start && (s - self.window_start).is_multiple_of(self.sample_every) {
+                let eps = self.world.fluid.solid_fraction_map();
+                let (rho, _) = self.world.fluid.moments();
+                let rows = fluid_row_means(&rho, &eps, nx, 0..pack_rows);
+                let ps: Vec<f64> = rows
+                    .iter()
+                    .map(|r| u.pressure_to_physical(CS2 * (r.1 - 1.0)))
+                    .collect();
+                let mean = ps.iter().sum::<f64>() / ps.len().max(1) as f64;
+                let (lo, hi) = ps
+                    .iter()
+                    .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &p| {
+                        (a.min(p), b.max(p))
+                    });
+                self.spread = (hi - lo) / mean.abs();
+
+                let settlement = self.layer_start - layer_height(&self.world.dem, loaded);
+                let half =
+                    usize::from(2 * (s - self.window_start) > self.steps - self.window_start);
+                let h = &mut self.halves[half];
+                h.0 += finite("sealed pore pressure", mean, s, hint)?;
+                h.1 += settlement;
+                h.2 += 1;
+            }
+        }
+        self.s = end;
+        Ok(())
+    }
+
+    /// The measurement, from the window's sums: `load` σ₀, `thickness` L (the strain's), `pack` the height of
+    /// the pack's rows (the Darcy run's n_s is theirs), `beta` β_f, `dead` d, the dry K_v and the Darcy run's n_s.
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn measurement(
+        &self,
+        load: f64,
+        thickness: f64,
+        pack: f64,
+        beta: f64,
+        dead: f64,
+        drained_modulus: f64,
+        storage_porosity: f64,
+    ) -> SealedMeasurement {
+        let mean = |k: usize| {
+            let n: u64 = self.halves.iter().map(|h| h.2).sum();
+            let s: f64 = self
+                .halves
+                .iter()
+                .map(|h| if k == 0 { h.0 } else { h.1 })
+                .sum();
+            s / n as f64
+        };
+        let (p, settlement) = (mean(0), mean(1));
+        let half = |h: &(f64, f64, u64)| h.0 / h.2 as f64;
+        let strain = settlement / thickness;
+        let n_s = (settlement / (beta * p) - dead) / pack;
+        let k_u = (load - p) / strain;
+        SealedMeasurement {
+            loading_efficiency: p / load,
+            loading_efficiency_predicted: 1.0
+                / (1.0 + drained_modulus * beta * (storage_porosity * pack + dead) / thickness),
+            dead_volume: dead,
+            settlement,
+            storage_porosity: n_s,
+            skeleton_modulus: k_u,
+            sample_loading_efficiency: 1.0 / (1.0 + k_u * beta * n_s),
+            pressure_spread: self.spread,
+            pressure_drift: (half(&self.halves[1]) - half(&self.halves[0])) / p,
+            steps: self.s,
+        }
+    }
+}
