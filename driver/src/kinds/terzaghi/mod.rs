@@ -470,17 +470,54 @@ pub struct TerzaghiState {
     sealed: Option<SealedRun>,
 }
 
-/// Height of the loaded layer: its grains' mean height weighted by bounding radius (their shares of the load,
+/// The loaded layer's mean of `of` over its grains, weighted by bounding radius (their shares of the load,
 /// [`DemWorld::apply_boundary_stress`]).
-fn layer_height(dem: &DemWorld<f64>, loaded: &[usize]) -> f64 {
+fn layer_mean(
+    dem: &DemWorld<f64>,
+    loaded: &[usize],
+    of: impl Fn(&lbdem_kernels::dem::shape::Particle<f64>) -> f64,
+) -> f64 {
     let (mut sum, mut w) = (0.0, 0.0);
     for &i in loaded {
         let g = &dem.particles[i];
         let r = g.shape.bounding_radius();
-        sum += r * g.position[1];
+        sum += r * of(g);
         w += r;
     }
     sum / w
+}
+
+/// Height of the loaded layer ([`layer_mean`] of the grains' heights).
+fn layer_height(dem: &DemWorld<f64>, loaded: &[usize]) -> f64 {
+    layer_mean(dem, loaded, |g| g.position[1])
+}
+
+/// The lattice of the column: walls west, east and south on the platens, `north` on top, the kind's collision
+/// and solid operator.
+fn column_lattice(
+    nx: usize,
+    ny: usize,
+    north: SideCondition<f64>,
+    params: FluidParams<f64>,
+    exec: &Exec,
+    collision: lbdem_kernels::fluid::collide::Collision<f64>,
+    op: SolidOperator,
+) -> Result<FluidLattice<f64>> {
+    let mut fluid = FluidLattice::<f64>::new(
+        nx,
+        ny,
+        Boundaries {
+            west: SideCondition::Wall,
+            east: SideCondition::Wall,
+            south: SideCondition::Wall,
+            north,
+        },
+        params,
+    )?;
+    exec.apply(&mut fluid);
+    fluid.set_collision(collision_of(collision)?)?;
+    fluid.set_solid_operator(op);
+    Ok(fluid)
 }
 
 /// A matched dashpot on the loaded layer ([`TerzaghiSection::load_dashpot`]).
@@ -691,25 +728,20 @@ fn start(case: &Case<Terzaghi>, exec: &Exec) -> Result<TerzaghiState> {
         tau: u.tau,
         force: [0.0; 2],
     };
-    let mut fluid = FluidLattice::<f64>::new(
-        nx,
-        ny,
-        Boundaries {
-            west: SideCondition::Wall,
-            east: SideCondition::Wall,
-            south: SideCondition::Wall,
-            north: SideCondition::Pressure { density: 1.0 },
-        },
-        params,
-    )?;
-    exec.apply(&mut fluid);
     let (default_collision, op) = fluid_choice(&case.scene, u.tau, &mut Warnings::default());
     let collision = case
         .scene
         .fluid
         .checked_collision(default_collision, u.tau)?;
-    fluid.set_collision(collision_of(collision)?)?;
-    fluid.set_solid_operator(op);
+    let fluid = column_lattice(
+        nx,
+        ny,
+        SideCondition::Pressure { density: 1.0 },
+        params,
+        exec,
+        collision,
+        op,
+    )?;
     // The rule (and the refusal) of the budget, which `check` printed.
     let substeps = limits::dem_substeps(
         "terzaghi.normal_stiffness",
@@ -721,20 +753,15 @@ fn start(case: &Case<Terzaghi>, exec: &Exec) -> Result<TerzaghiState> {
     let map = LatticeMap::of(u, [0.5 * h, 0.5 * h]);
     // The sealed copy (`sealed_check`): the same grains and fluid, its top a lid (a velocity side).
     let sealed = if c.sealed_check {
-        let mut lid = FluidLattice::<f64>::new(
+        let mut lid = column_lattice(
             nx,
             ny,
-            Boundaries {
-                west: SideCondition::Wall,
-                east: SideCondition::Wall,
-                south: SideCondition::Wall,
-                north: SideCondition::VelocityProfile,
-            },
+            SideCondition::VelocityProfile,
             params,
+            exec,
+            collision,
+            op,
         )?;
-        exec.apply(&mut lid);
-        lid.set_collision(collision_of(collision)?)?;
-        lid.set_solid_operator(op);
         lid.set_side_profile(Side::North, &vec![[0.0; 2]; nx])?;
         let mut w = CoupledWorld::new(
             lid,

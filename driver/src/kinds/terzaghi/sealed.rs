@@ -26,9 +26,8 @@ use serde::{Deserialize, Serialize};
 
 use lbdem_kernels::fluid::lattice::Side;
 
-use super::{layer_height, LoadDashpot};
+use super::{layer_height, layer_mean, LoadDashpot};
 use crate::engine::coupled::CoupledWorld;
-use crate::engine::dem::DemWorld;
 use crate::error::Result;
 use crate::observe::flow::fluid_row_means;
 use crate::observe::health::finite;
@@ -86,18 +85,6 @@ pub(super) struct SealedRun {
     spread: f64,
 }
 
-/// The loaded layer's vertical velocity: its grains' mean weighted by bounding radius (their shares of the load).
-fn layer_velocity(dem: &DemWorld<f64>, loaded: &[usize]) -> f64 {
-    let (mut sum, mut w) = (0.0, 0.0);
-    for &i in loaded {
-        let g = &dem.particles[i];
-        let r = g.shape.bounding_radius();
-        sum += r * g.velocity[1];
-        w += r;
-    }
-    sum / w
-}
-
 impl SealedRun {
     /// A sealed run of `world` (its north side a velocity profile at rest) lasting [`SEALED_CROSSINGS`] sound
     /// crossings of the column (`crossing_steps` fluid steps each).
@@ -147,7 +134,8 @@ impl SealedRun {
         for s in self.s + 1..=end {
             // The lid moves with the layer; its pressure (the Zou–He density of the north side, from the
             // populations it keeps) is taken off the layer's load.
-            let v = u.velocity_to_lattice(layer_velocity(&self.world.dem, loaded));
+            // The loaded layer's vertical velocity, weighted as its height is.
+            let v = u.velocity_to_lattice(layer_mean(&self.world.dem, loaded, |g| g.velocity[1]));
             lid.fill([0.0, v]);
             self.world.fluid.set_side_profile(Side::North, &lid)?;
             let known = self
