@@ -84,7 +84,7 @@ const HINT_LAMBDA: &str =
 
 mod sealed;
 pub use sealed::SealedMeasurement;
-use sealed::SealedRun;
+use sealed::{SealedRun, SEALED_FREE_ROWS};
 
 /// The default fluid collision and the solid operator of a Terzaghi scene: without `terzaghi.solid_operator`,
 /// Ω₁ₗ with BGK (the operator its README tables were measured with). TRT + ΩΛ, the free-grain kinds' default,
@@ -751,11 +751,12 @@ fn start(case: &Case<Terzaghi>, exec: &Exec) -> Result<TerzaghiState> {
         critical,
     )? as u32;
     let map = LatticeMap::of(u, [0.5 * h, 0.5 * h]);
-    // The sealed copy (`sealed_check`): the same grains and fluid, its top a lid (a velocity side).
+    // The sealed copy (`sealed_check`): the same grains and fluid, its top a lid (a velocity side) just above
+    // the pack.
     let sealed = if c.sealed_check {
         let mut lid = column_lattice(
             nx,
-            ny,
+            pack_rows + SEALED_FREE_ROWS,
             SideCondition::VelocityProfile,
             params,
             exec,
@@ -1145,13 +1146,13 @@ impl TerzaghiState {
                     p.thickness,
                     self.pack_rows as f64 * u.spacing,
                     p.fluid_compressibility,
-                    self.free_rows as f64 * u.spacing,
+                    SEALED_FREE_ROWS as f64 * u.spacing,
                     p.drained_modulus,
                     p.storage_porosity,
                 );
                 eprintln!(
-                    "lbdem: terzaghi: sealed column: p/sigma_0 = {:.4} (predicted {:.4} with the free layer's dead \
-                     volume {:.3e}); with the grains free: storage porosity {:.4} (Darcy, grains held: {:.4}), \
+                    "lbdem: terzaghi: sealed column: p/sigma_0 = {:.4} (predicted {:.4} with the lid's dead volume \
+                     {:.3e}); with the grains free: storage porosity {:.4} (Darcy, grains held: {:.4}), \
                      undrained skeleton modulus {:.4e} (dry K_v {:.4e}); the sample's gamma {:.4} (predicted \
                      {:.4}); pressure spread {:.1e}, drift {:.1e}",
                     m.loading_efficiency,
@@ -1567,7 +1568,8 @@ impl Kind for Terzaghi {
         b.note(format!(
             "DEM critical step {critical:.4e}: {substeps} DEM sub-step(s) per fluid step"
         ));
-        // Two lattices: the Darcy run's and the consolidation's (three with the sealed column's).
+        // Two lattices: the Darcy run's and the consolidation's (three with the sealed column's, at most as
+        // tall).
         let lattices = if c.sealed_check { 3 } else { 2 };
         limits::lattice(
             &mut b,

@@ -2,9 +2,9 @@
 //! grains free, before the drained run (issue 14, item 1: the loading efficiency γ = Δp/Δσ of a sealed sample
 //! under a step load).
 //!
-//! A copy of the coupled column whose top is a lid instead of the drained reservoir: the lattice's north side
-//! is a Zou–He velocity side moving at the loaded layer's vertical velocity (as if a piston rested on the layer
-//! and sealed the free fluid layer above it), and the lid's fluid pressure is taken off the load the layer
+//! A copy of the coupled column whose top is a lid instead of the drained reservoir, [`SEALED_FREE_ROWS`]
+//! above the pack: the lattice's north side is a Zou–He velocity side moving at the loaded layer's vertical velocity (as if a piston rested on the layer
+//! and sealed the free fluid rows above it), and the lid's fluid pressure is taken off the load the layer
 //! carries (the total stress σ₀ is shared by the lid, i.e. the fluid, and the grains). So no fluid leaves: the
 //! lid injects what the layer's descent makes room for, which is what a piston following the layer would push
 //! into the column. The step load then splits into a pore pressure p and an effective stress σ₀ − p, the
@@ -13,7 +13,7 @@
 //!
 //! Measured, averaged over the last [`SEALED_WINDOW`] of [`SEALED_CROSSINGS`] sound-crossing times: the mean
 //! pore pressure p over the pack's fluid-only row means and the layer's settlement s. The lid fills a dead
-//! volume d (the free fluid layer above the pack, per unit width) besides the pores, so with the lattice's
+//! volume d (the free fluid rows between the pack and the lid, per unit width) besides the pores, so with the lattice's
 //! storage β_f (n_s L + d) of the sealed fluid:
 //! * the storage porosity with the grains free, n_s' = (s/(β_f p) − d)/L (mass balance: the fluid the lid
 //!   injected, ρ₀ W s, is stored at the pressure p by the pores and the dead volume) — against the Darcy run's
@@ -33,6 +33,13 @@ use crate::observe::flow::fluid_row_means;
 use crate::observe::health::finite;
 use crate::units::{LatticeUnits, CS2};
 
+/// Rows of free fluid between the pack's top and the lid (the lid's dead volume d = 2 spacings). Few: the dead
+/// volume fills from the pack by Darcy flow only, over the column's diffusion time. With the drained lattice's
+/// free layer (2 `radius_max`, 12 rows on the bundled column, 12 % of its storage) that left the sealed
+/// column's pressure 1.2 × its mean at the base and 0.6–0.7 × at the top for as long as the run (with the step
+/// and with a load ramped over 12 sound-crossing times alike: quasi-static, not a wave), and its mean ≈ 1 %
+/// short of settled.
+pub const SEALED_FREE_ROWS: usize = 2;
 /// Length of the sealed run in sound-crossing times of the column: the matched dashpot takes the undrained
 /// wave out within a few crossings; the rest is the measurement window and a margin.
 pub const SEALED_CROSSINGS: f64 = 20.0;
@@ -48,7 +55,7 @@ pub struct SealedMeasurement {
     pub loading_efficiency: f64,
     /// Its prediction from K_v and the Darcy run's n_s with the dead volume, 1/(1 + K_v β_f (n_s L + d)/L).
     pub loading_efficiency_predicted: f64,
-    /// The dead volume d the lid seals besides the pores: the free fluid layer's height.
+    /// The dead volume d the lid seals besides the pores: the free fluid rows' height.
     pub dead_volume: f64,
     /// Settlement of the loaded layer over the window (mean), s.
     pub settlement: f64,
@@ -58,10 +65,8 @@ pub struct SealedMeasurement {
     pub skeleton_modulus: f64,
     /// The sample's loading efficiency without the dead volume, 1/(1 + K_u' β_f n_s').
     pub sample_loading_efficiency: f64,
-    /// Spread of the pack's row-mean pressures (max − min) at the end, over p. Not zero: the step leaves the
-    /// sealed column's pressure higher at the base than at the top (bundled column: 1.23 and 0.61 × the mean
-    /// after 3 crossings, 1.09 and 0.91 after 20), and it equalises only by diffusion, over L²/c_v. The mean,
-    /// which the mass balance and γ use, is steady long before ([`SealedMeasurement::pressure_drift`]).
+    /// Spread of the pack's row-mean pressures (max − min) at the end, over p: a sealed column at rest has one
+    /// pressure (see [`SEALED_FREE_ROWS`] for what a larger dead volume does to it).
     pub pressure_spread: f64,
     /// Change of the mean pressure from the window's first half to its second, over p (drift: a leak or a
     /// creeping skeleton).
