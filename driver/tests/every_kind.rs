@@ -212,6 +212,8 @@ const HEADER_ONLY_AT_THE_HOLD: &[(&str, &str)] = &[
     ("terzaghi", "profiles.csv"),
     // Its settlement is recorded with the profiles.
     ("terzaghi", "settlement.csv"),
+    // The sealed column runs after the Darcy run too.
+    ("terzaghi", "sealed.csv"),
     // Events: a row per broken bond; none has broken by the hold.
     ("dry", "broken_bonds.csv"),
     ("fracture", "breaks.csv"),

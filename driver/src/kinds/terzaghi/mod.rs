@@ -468,6 +468,9 @@ pub struct TerzaghiState {
     /// The sealed column (`sealed_check`), run after the Darcy run and before the drained one.
     #[serde(default)]
     sealed: Option<SealedRun>,
+    /// The sealed column's pore pressure at its end: (depth, pressure) per fluid row of the pack (`sealed.csv`).
+    #[serde(default)]
+    sealed_profile: Vec<[f64; 2]>,
 }
 
 /// The loaded layer's mean of `of` over its grains, weighted by bounding radius (their shares of the load,
@@ -909,6 +912,7 @@ fn start(case: &Case<Terzaghi>, exec: &Exec) -> Result<TerzaghiState> {
         dashpot: None,
         layer_start: None,
         sealed,
+        sealed_profile: Vec::new(),
     })
 }
 
@@ -1167,6 +1171,12 @@ impl TerzaghiState {
                     m.pressure_spread,
                     m.pressure_drift
                 );
+                let l = self.prediction.thickness;
+                self.sealed_profile = run
+                    .last
+                    .iter()
+                    .map(|&(y, p)| [l - (y as f64 + 0.5) * u.spacing, p])
+                    .collect();
                 self.prediction.sealed = Some(m);
                 self.sealed = None;
             }
@@ -1706,7 +1716,21 @@ impl Kind for Terzaghi {
             &["time", "settlement", "terzaghi_settlement", "wet_modulus"],
             rows,
         );
-        write_atomic(&dir.join("settlement.csv"), table.as_bytes())
+        write_atomic(&dir.join("settlement.csv"), table.as_bytes())?;
+        if !case.scene.terzaghi.sealed_check {
+            return Ok(());
+        }
+        // The sealed column's pressure profile at its end (header only until it has run).
+        let mean = p
+            .sealed
+            .as_ref()
+            .map_or(f64::NAN, |m| m.loading_efficiency * load);
+        let rows = state
+            .sealed_profile
+            .iter()
+            .map(|d| vec![d[0], d[1] / load, d[1] / mean]);
+        let table = csv(&["depth", "pressure_over_load", "pressure_over_mean"], rows);
+        write_atomic(&dir.join("sealed.csv"), table.as_bytes())
     }
 
     fn results(case: &Case<Self>, state: &TerzaghiState) -> Result<serde_json::Value> {

@@ -88,6 +88,9 @@ pub(super) struct SealedRun {
     /// Sums over the window's first and second halves: pressure, settlement, samples.
     halves: [(f64, f64, u64); 2],
     spread: f64,
+    /// The last sample's row means: (row, pressure) (`sealed.csv`).
+    #[serde(default)]
+    pub(super) last: Vec<(usize, f64)>,
 }
 
 impl SealedRun {
@@ -107,6 +110,7 @@ impl SealedRun {
             layer_start: f64::NAN,
             halves: [(0.0, 0.0, 0); 2],
             spread: 0.0,
+            last: Vec::new(),
         }
     }
 
@@ -174,7 +178,7 @@ impl SealedRun {
                         (a.min(p), b.max(p))
                     });
                 self.spread = (hi - lo) / mean.abs();
-
+                self.last = rows.iter().map(|r| r.0).zip(ps.iter().copied()).collect();
                 let settlement = self.layer_start - layer_height(&self.world.dem, loaded);
                 let half =
                     usize::from(2 * (s - self.window_start) > self.steps - self.window_start);
