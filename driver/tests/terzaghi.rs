@@ -494,7 +494,7 @@ fn a_pack_that_does_not_give_back_its_dry_settlement_is_refused_naming_the_load(
 
 /// The sealed column (`sealed_check`, issue 14 item 1: the undrained response of a sealed sample under a step
 /// load, grains free): its mean pore pressure over the load is the loading efficiency predicted from the dry K_v
-/// and the Darcy run's storage porosity (with the dead volume of the free layer the lid also seals), and the
+/// and the Darcy run's storage porosity (with the dead volume of the two free rows the lid also seals), and the
 /// storage porosity and skeleton modulus it implies with the grains free are those measured with the grains held
 /// and dry. The sealed copy runs beside the drained column without touching it: the drained run's records are
 /// bitwise those of a run without the check.

@@ -706,10 +706,15 @@ fn start(case: &Case<Terzaghi>, exec: &Exec) -> Result<TerzaghiState> {
             "terzaghi.load",
             c.load,
             &format!(
-                "the dry step load rearranged the pack: taken off again it gave back {:.0} % of its settlement (strain \
-                 {dry_strain:.3e}; an elastic skeleton gives back all of it), so the drained modulus it measures \
-                 ({drained_modulus:.4e}) is not the skeleton's",
-                100.0 * dry_recovery
+                "the dry step load rearranged the pack: taken off again it gave back {:.0} % of its settlement{} \
+                 (strain {dry_strain:.3e}; an elastic skeleton gives back all of it), so the drained modulus it \
+                 measures ({drained_modulus:.4e}) is not the skeleton's",
+                100.0 * dry_recovery,
+                if back.converged {
+                    ""
+                } else {
+                    " and had not settled"
+                }
             ),
             "lower terzaghi.load, raise terzaghi.isotropic_stress, or pack another column (terzaghi.seed)",
         ));

@@ -25,6 +25,7 @@
 use serde::{Deserialize, Serialize};
 
 use lbdem_kernels::fluid::lattice::Side;
+use lbdem_reference::poroelastic::{biot_modulus, loading_efficiency};
 
 use super::{layer_height, layer_mean, LoadDashpot};
 use crate::engine::coupled::CoupledWorld;
@@ -154,10 +155,12 @@ impl SealedRun {
                 .unwrap_or(1.0 + v);
             let p_lid = u.pressure_to_physical(CS2 * (known / (1.0 + v) - 1.0));
             let share = 1.0 - finite("sealed lid pressure", p_lid, s, hint)? / total;
-            let dashpot: Vec<f64> = match &self.dashpot {
-                Some(d) => d.forces(&self.world.dem, loaded).collect(),
-                None => vec![0.0; loaded.len()],
-            };
+            // The dashpot's forces (none before `load`), read from the grains before the step.
+            let dashpot = self
+                .dashpot
+                .iter()
+                .flat_map(|d| d.forces(&self.world.dem, loaded))
+                .chain(std::iter::repeat(0.0));
             for (&i, f) in loaded.iter().zip(dashpot) {
                 let (base, m) = after[i];
                 self.world.applied[i] = (base * share + lbdem_kernels::math::vector(0.0, f), m);
@@ -221,13 +224,21 @@ impl SealedRun {
         let k_u = (load - p) / strain;
         SealedMeasurement {
             loading_efficiency: p / load,
-            loading_efficiency_predicted: 1.0
-                / (1.0 + drained_modulus * beta * (storage_porosity * pack + dead) / thickness),
+            // The lid's dead volume stores like pore fluid: an effective storage porosity over the column.
+            loading_efficiency_predicted: loading_efficiency(
+                biot_modulus((storage_porosity * pack + dead) / thickness, beta, 0.0, 1.0),
+                1.0,
+                drained_modulus,
+            ),
             dead_volume: dead,
             settlement,
             storage_porosity: n_s,
             skeleton_modulus: k_u,
-            sample_loading_efficiency: 1.0 / (1.0 + k_u * beta * n_s),
+            sample_loading_efficiency: loading_efficiency(
+                biot_modulus(n_s, beta, 0.0, 1.0),
+                1.0,
+                k_u,
+            ),
             pressure_spread: self.spread,
             pressure_drift: (half(&self.halves[1]) - half(&self.halves[0])) / p,
             steps: self.s,
