@@ -67,7 +67,9 @@ pub struct SealedMeasurement {
     /// The sample's loading efficiency without the dead volume, 1/(1 + K_u' β_f n_s').
     pub sample_loading_efficiency: f64,
     /// Spread of the pack's row-mean pressures (max − min) at the end, over p: a sealed column at rest has one
-    /// pressure (see [`SEALED_FREE_ROWS`] for what a larger dead volume does to it).
+    /// pressure; what is left after 20 crossings is the tail of the column's first pressure mode, set up by the
+    /// step and relaxing by Darcy flow over about L²/(π² c_v) (README, *The sealed column*; see
+    /// [`SEALED_FREE_ROWS`] for what a larger dead volume does to it).
     pub pressure_spread: f64,
     /// Change of the mean pressure from the window's first half to its second, over p (drift: a leak or a
     /// creeping skeleton).
