@@ -60,8 +60,10 @@ pub const MAGIC: [u8; 8] = *b"LBDEMCKP";
 /// terzaghi; issue 16), one state type for the two sweep kinds (issue 12) and the free-grain default operators
 /// (issue 11) change those payloads; version-4 files are refused with the version named. Version 6: the lattice's
 /// remap tolerance and the grain geometry its coverage was mapped for (issue 13, `fluid.remap_tolerance`);
-/// version-5 files are refused with the version named.
-pub const FORMAT_VERSION: u32 = 6;
+/// version-5 files are refused with the version named. Version 7: the terzaghi kind's sealed column and dry
+/// recovery (issue 14) and the fracture kind's count of grains outside the lattice change those payloads;
+/// version-6 files are refused with the version named.
+pub const FORMAT_VERSION: u32 = 7;
 /// SHA-256 of a scene text (stored in the header, checked on resume).
 pub fn scene_hash(text: &str) -> [u8; 32] {
     Sha256::digest(text.as_bytes()).into()

@@ -661,9 +661,18 @@ pub struct FractureState {
     center_x: Vec<f64>,
     snapshots: usize,
     prep_seconds: f64,
+    /// Grains whose centre lay outside the fluid lattice at the latest record, and the time of the first record
+    /// that found one (see [`MAX_OUTSIDE_FRACTION`]).
+    outside: usize,
+    first_outside: Option<f64>,
 }
 
 impl Persist for FractureState {}
+
+/// Largest fraction of the grains whose centres may lie outside the fluid lattice (beyond `fluid.margin` at the
+/// sample's ends) before the run is stopped: such grains feel no fluid, so once the sample has come apart that
+/// far the coupled run no longer says what the scene asks (the first one is warned).
+pub const MAX_OUTSIDE_FRACTION: f64 = 0.05;
 
 const HISTORY_COLUMNS: [&str; 9] = [
     "time",
@@ -796,6 +805,8 @@ pub fn prepare_packed(scene: &FractureScene, packing: Packing<f64>) -> Result<Fr
         center_x: Vec::new(),
         snapshots: 0,
         prep_seconds: 0.0,
+        outside: 0,
+        first_outside: None,
     };
     match &scene.fluid {
         None => {
@@ -1214,7 +1225,7 @@ impl<'a, S: std::ops::Deref<Target = FractureState>> FractureRun<'a, S> {
                 "fluid_mass": fp.world.fluid.mass(),
             })
         });
-        json!({
+        let mut v = json!({
             "packing": packed,
             "fluid": fluid,
             "model_time": self.state.steps_done as f64 * self.state.dt,
@@ -1226,7 +1237,13 @@ impl<'a, S: std::ops::Deref<Target = FractureState>> FractureRun<'a, S> {
             "fractures": fractures.len(),
             "orientation": orientation,
             "permeability": permeability,
-        })
+            "grains_outside_lattice": self.state.outside,
+        });
+        // Present once a grain has left the lattice (a null would read as a non-finite result).
+        if let (Some(t), Some(map)) = (self.state.first_outside, v.as_object_mut()) {
+            map.insert("first_outside_time".into(), json!(t));
+        }
+        v
     }
 }
 
@@ -1402,6 +1419,24 @@ impl<'a, S: std::ops::DerefMut<Target = FractureState>> FractureRun<'a, S> {
             }
             None => (0.0, 0.0),
         };
+        // Grains whose centre has left the fluid lattice (through the ends: beyond `fluid.margin`).
+        let outside = self.fluid().map(|fp| {
+            let h = fp.setup.units.spacing;
+            let xs = &self.state.center_x;
+            let (xa, xb) = (xs[0] - 0.5 * h, xs[xs.len() - 1] + 0.5 * h);
+            let gone: Vec<usize> = d
+                .particles
+                .iter()
+                .enumerate()
+                .filter(|(_, g)| {
+                    let x = g.position[0];
+                    x.is_finite() && !(xa..=xb).contains(&x)
+                })
+                .map(|(i, _)| i)
+                .collect();
+            (gone, xa, xb, fp.world.steps())
+        });
+        let grains = d.particles.len();
         if let Some((pline, sline)) = lines {
             self.state.center_pressure.push(pline);
             self.state.center_speed.push(sline);
@@ -1422,6 +1457,43 @@ impl<'a, S: std::ops::DerefMut<Target = FractureState>> FractureRun<'a, S> {
             max_speed,
             kinetic_energy: ke,
         });
+        let Some((gone, xa, xb, step)) = outside else {
+            return Ok(());
+        };
+        self.state.outside = gone.len();
+        if gone.is_empty() {
+            return Ok(());
+        }
+        if self.state.first_outside.is_none() {
+            self.state.first_outside = Some(time);
+            eprintln!(
+                "lbdem: WARNING: fracture: {} of the {grains} grains left the fluid lattice ({xa:.4} to {xb:.4} cm along \
+                 x) by t = {time:.4} s: beyond fluid.margin they feel no fluid; the run stops once more than {:.0} % \
+                 have left",
+                gone.len(),
+                100.0 * MAX_OUTSIDE_FRACTION
+            );
+        }
+        if gone.len() as f64 > MAX_OUTSIDE_FRACTION * grains as f64 {
+            let first = gone[0];
+            return Err(LbdemError::DivergedParticle {
+                step,
+                particle: first,
+                quantity: "x position".into(),
+                value: format!(
+                    "{:.4} cm, outside the fluid lattice ({xa:.4} to {xb:.4} cm) with {} of the {grains} grains \
+                     ({:.1} %) at t = {time:.4} s",
+                    self.dem().particles[first].position[0],
+                    gone.len(),
+                    100.0 * gone.len() as f64 / grains as f64
+                ),
+                out: String::new(),
+                hint: "the sample came apart and its grains left the lattice, where they feel no fluid: a larger \
+                       loading.axial_stress_after holds the ends, a smaller loading.pressure_drop pushes the grains \
+                       less, a wider fluid.margin only lets the run go on longer"
+                    .into(),
+            });
+        }
         Ok(())
     }
 
