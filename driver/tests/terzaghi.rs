@@ -345,6 +345,53 @@ fn tall_column_with_an_absorbing_load_within_three_percent() {
     );
 }
 
+/// Issue 14's acceptance in the default suite: the full case's grains, fluid and load on a coarser lattice
+/// (h = 0.032 cm: grains 2.5–3.75 nodes in radius as the fluid sees them, c_s kept at 28.9 cm/s, τ = 1.06) in a
+/// 2.4 × 4.0 cm column, run for one diffusion time (26 s; 40–55 s of wall time). Why not a shorter column: a
+/// pack made against platens is looser at its ends, which slows a 1.6 cm column's relaxation by 8–18 %
+/// (README, *The sealed column*); at 4.0 cm the ends are a small share. Measured (2026-12-07, release, seeds 7 /
+/// 9 / 10 / 11 / 12 / 13 of this column; 8 refused, its dry step rearranged the pack): RMS 1.41 / 1.50 / 3.25 /
+/// 1.26 / 3.03 / 2.49 % of γσ₀, fit −2.6 / +2.2 / −6.9 / −2.2 / −8.3 / +2.4 %: the criterion holds for this seed
+/// (the bundled scenes' seed) and for four of the six realisations, and misses by 0.25 and 0.03 points on two.
+#[test]
+fn a_coarse_tall_column_follows_terzaghi_within_three_percent() {
+    let p = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/terzaghi_tall.toml");
+    let mut s = Case::<Terzaghi>::read(&std::fs::read_to_string(p).unwrap(), "terzaghi_tall.toml")
+        .unwrap()
+        .scene;
+    s.fluid.spacing = 0.032;
+    s.fluid.timestep = Some(6.4e-4);
+    s.terzaghi.height = 4.0;
+    s.terzaghi.duration = 26.0;
+    s.terzaghi.sealed_check = false;
+    let (o, _) = terzaghi::simulate(&Case::<Terzaghi>::new(s).unwrap()).unwrap();
+    let (p, c) = (&o.prediction, &o.comparison);
+    eprintln!("{p:#?}\n{c:#?}");
+    assert_eq!(p.escaped_grains, 0);
+    // An elastic skeleton (measured 1.0002): the drained modulus is the skeleton's.
+    assert!((p.dry_recovery - 1.0).abs() < 0.01, "{}", p.dry_recovery);
+    // The run lasts about one diffusion time L²/c_v, so the comparison is not diluted by records near zero.
+    let diffusion_times = 26.0 * p.consolidation_coefficient / (p.thickness * p.thickness);
+    assert!(diffusion_times < 1.2, "{diffusion_times} diffusion times");
+    // Issue 14: RMS of p − γσ₀ × Terzaghi's series after 3 sound-crossing times within 3 % of γσ₀, with γ and
+    // c_v predicted from the independent measurements (nothing fitted), and a free fit of c within 10 %.
+    assert!(
+        c.rms_over_gamma_load <= 0.03,
+        "RMS {}",
+        c.rms_over_gamma_load
+    );
+    assert!(
+        (c.fitted_over_predicted - 1.0).abs() < 0.10,
+        "fit {}",
+        c.fitted_over_predicted
+    );
+    assert!(
+        c.settlement_rms_over_final < 0.05,
+        "settlement {}",
+        c.settlement_rms_over_final
+    );
+}
+
 /// The bundled scene with a 1 s sin² load ramp (10 % of L²/c_v), compared from the ramp's end with the
 /// ramped solution drained at the measured Gibbs dividing surface of the pack's top layer
 /// (`drained_surface = "dividing_surface"`; `cargo test -p lbdem --test integration terzaghi:: -- --ignored`, 45–80 s,
