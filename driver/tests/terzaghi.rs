@@ -347,12 +347,12 @@ fn tall_column_with_an_absorbing_load_within_three_percent() {
 
 /// Issue 14's acceptance in the default suite: the full case's grains, fluid and load on a coarser lattice
 /// (h = 0.032 cm: grains 2.5–3.75 nodes in radius as the fluid sees them, c_s kept at 28.9 cm/s, τ = 1.06) in a
-/// 2.4 × 4.0 cm column, run for one diffusion time (26 s; 40–55 s of wall time). Why not a shorter column: a
+/// 2.4 × 4.0 cm column, run for 0.8 diffusion times (20 s; 30–60 s of wall time). Why not a shorter column: a
 /// pack made against platens is looser at its ends, which slows a 1.6 cm column's relaxation by 8–18 %
 /// (README, *The sealed column*); at 4.0 cm the ends are a small share. Measured (2026-12-07, release, seeds 7 /
-/// 9 / 10 / 11 / 12 / 13 of this column; 8 refused, its dry step rearranged the pack): RMS 1.41 / 1.50 / 3.25 /
-/// 1.26 / 3.03 / 2.49 % of γσ₀, fit −2.6 / +2.2 / −6.9 / −2.2 / −8.3 / +2.4 %: the criterion holds for this seed
-/// (the bundled scenes' seed) and for four of the six realisations, and misses by 0.25 and 0.03 points on two.
+/// 9 / 10 / 11 / 12 / 13 of this column; 8 refused, its dry step rearranged the pack): RMS 1.60 / 1.70 / 3.69 /
+/// 1.42 / 3.40 / 2.83 % of γσ₀, fit −2.8 / +3.0 / −7.5 / −2.4 / −9.0 / +2.4 %: the criterion holds for this seed
+/// (the bundled scenes' seed) and for four of the six realisations, and the fit within 10 % for all six.
 #[test]
 fn a_coarse_tall_column_follows_terzaghi_within_three_percent() {
     let p = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/terzaghi_tall.toml");
@@ -362,7 +362,7 @@ fn a_coarse_tall_column_follows_terzaghi_within_three_percent() {
     s.fluid.spacing = 0.032;
     s.fluid.timestep = Some(6.4e-4);
     s.terzaghi.height = 4.0;
-    s.terzaghi.duration = 26.0;
+    s.terzaghi.duration = 20.0;
     s.terzaghi.sealed_check = false;
     let (o, _) = terzaghi::simulate(&Case::<Terzaghi>::new(s).unwrap()).unwrap();
     let (p, c) = (&o.prediction, &o.comparison);
@@ -370,9 +370,10 @@ fn a_coarse_tall_column_follows_terzaghi_within_three_percent() {
     assert_eq!(p.escaped_grains, 0);
     // An elastic skeleton (measured 1.0002): the drained modulus is the skeleton's.
     assert!((p.dry_recovery - 1.0).abs() < 0.01, "{}", p.dry_recovery);
-    // The run lasts about one diffusion time L²/c_v, so the comparison is not diluted by records near zero.
-    let diffusion_times = 26.0 * p.consolidation_coefficient / (p.thickness * p.thickness);
-    assert!(diffusion_times < 1.2, "{diffusion_times} diffusion times");
+    // The run lasts less than one diffusion time L²/c_v (measured 0.82), so the comparison is not diluted by
+    // records near zero.
+    let diffusion_times = 20.0 * p.consolidation_coefficient / (p.thickness * p.thickness);
+    assert!(diffusion_times < 1.0, "{diffusion_times} diffusion times");
     // Issue 14: RMS of p − γσ₀ × Terzaghi's series after 3 sound-crossing times within 3 % of γσ₀, with γ and
     // c_v predicted from the independent measurements (nothing fitted), and a free fit of c within 10 %.
     assert!(
