@@ -353,30 +353,6 @@ fn quick_permeability_at_fluid_radius_095_is_within_4x_of_table_6_3() {
     );
 }
 
-/// The quick base scene shortened to `duration`, written to a scene file of its own.
-fn short_scene(name: &str, duration: f64) -> PathBuf {
-    let text = std::fs::read_to_string(quick("base")).unwrap();
-    let text = text
-        .lines()
-        .map(|l| {
-            if l.starts_with("duration") {
-                format!("duration = {duration}")
-            } else if l.starts_with("snapshot_interval") {
-                "snapshot_interval = 0.0".to_string()
-            } else if l.starts_with("permeability") {
-                "permeability = false".to_string()
-            } else {
-                l.to_string()
-            }
-        })
-        .collect::<Vec<_>>()
-        .join("\n");
-    let path =
-        std::env::temp_dir().join(format!("lbdem-fracture-{}-{name}.toml", std::process::id()));
-    std::fs::write(&path, text).unwrap();
-    path
-}
-
 /// The quick base scene with the lines starting with each given prefix replaced, written to a scene file.
 fn edited_scene(name: &str, edits: &[(&str, &str)]) -> PathBuf {
     let text = std::fs::read_to_string(quick("base")).unwrap();
@@ -437,6 +413,19 @@ fn a_sample_whose_grains_leave_the_lattice_is_stopped_naming_the_loads() {
     let out = out_dir("inside");
     let s = run_with(&path, &out, None).expect("run");
     assert_eq!(s["results"]["grains_outside_lattice"], 0);
+}
+
+/// The quick base scene shortened to `duration`, written to a scene file of its own.
+fn short_scene(name: &str, duration: f64) -> PathBuf {
+    let duration = format!("duration = {duration}");
+    edited_scene(
+        name,
+        &[
+            ("duration", &duration),
+            ("snapshot_interval", "snapshot_interval = 0.0"),
+            ("permeability", "permeability = false"),
+        ],
+    )
 }
 
 fn same_files(a: &Path, b: &Path) {
