@@ -68,8 +68,8 @@ const ELASTIC_DRY_RECOVERY: f64 = 0.99;
 pub const DIFFUSION_DOMINATED: f64 = 20.0;
 /// Column height, in diameters of the largest grains, below which the set-up warns that the pack's looser ends
 /// weigh on the comparison: 1.6 cm columns of the bundled grains (6.7 diameters) relaxed 8–18 % slower than
-/// predicted, sealed or drained, 2.4–4.8 cm ones (10–20) within the realisations' scatter (README, *The sealed
-/// column*).
+/// predicted, sealed or drained, on every seed; 2.4 cm ones (10 diameters) fitted −12 … +6 % and 4.0–4.8 cm ones
+/// −9 … +3 % over the seeds, i.e. as much faster as slower (README, *The sealed column*).
 pub const SHORT_COLUMN_DIAMETERS: f64 = 10.0;
 /// Start-up: records earlier than this many fluid sound-crossing times of the column are not compared.
 pub const STARTUP_CROSSINGS: f64 = 3.0;
