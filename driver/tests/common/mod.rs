@@ -4,6 +4,7 @@ pub mod moving_cases;
 pub mod psm_cases;
 pub mod scene_text;
 pub mod tweaked_demo;
+pub mod wall_cases;
 use lbdem::engine::exec::Exec;
 use lbdem::kinds::channel::{simulate, Channel, ChannelOutcome, ChannelScene};
 use lbdem::run::Case;
