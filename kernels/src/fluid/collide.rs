@@ -240,8 +240,8 @@ pub const ALL_LINKS_OPEN: OpenLinks = 0x1fe;
 /// ε(1 − ε), the same at every Λ); the friction thickens every cut wall by about 0.04–0.1 spacing at κ = 1.21.
 /// Flow through the gaps of a pack or an array is largely pressure-driven, so κ > 0 there, and the κ a case
 /// needs grows with its pressure-driven share (0.33 / 0.51 / 0.99 for the l = 40 arrays at c = 0.2 / 0.4 /
-/// 0.6), which no single constant fits. κ = 1.21 is the least-squares fit of the drag of the periodic square array of cylinders at **l = 30
-/// nodes**, c = 0.2 / 0.4 / 0.6, against Sangani & Acrivos (1982) (drag linear in κ between the two values
+/// 0.6), which no single constant fits. κ = 1.21 is the least-squares fit of the drag of the periodic square
+/// array of cylinders at **l = 30 nodes**, c = 0.2 / 0.4 / 0.6, against Sangani & Acrivos (1982) (drag linear in κ between the two values
 /// run, 1.21 and 1.27; `cargo run --release -p lbdem --example kappa_calibration`), with the full-cover gap
 /// [`LAMBDA_FULL_GAP`] of 0.05 (with the earlier gap of 1e-3 the fit was 1.27). No acceptance test uses l = 30. Held-out
 /// errors (every τ, TRT at Λ = 3/16, B = ε; README "ΩΛ's friction constant κ"): l = 20, c = 0.2 / 0.4 and
