@@ -155,10 +155,14 @@ fn main() {
 }
 
 fn run() {
-    let tau: f64 = std::env::args()
-        .nth(1)
-        .map(|s| s.parse().expect("τ as a number"))
-        .unwrap_or(0.8);
+    let tau: f64 = match std::env::args().nth(1).map(|s| s.parse::<f64>()) {
+        None => 0.8,
+        Some(Ok(t)) if t > 0.5 && t.is_finite() => t,
+        Some(_) => {
+            eprintln!("wall_offsets: the argument is τ, a number above 0.5 (e.g. 0.8)");
+            std::process::exit(2);
+        }
+    };
     println!("ΩΛ + TRT (Λ = 3/16), B = ε, κ = {LAMBDA_FRICTION}, τ = {tau}; offset per wall in lattice spacings, + = the solid acts thicker");
     println!();
     println!("| case | cut cells | offset per wall |");
