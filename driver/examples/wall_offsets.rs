@@ -142,7 +142,15 @@ fn couette_offsets(r1: f64, r2: f64, off: f64, tau: f64) -> (f64, f64) {
     let (a, b) = fit(&l);
     let r1_eff = (b / (omega - a)).sqrt();
     let r2_eff = (-b / a).sqrt();
-    (r1_eff - r1, r2 - r2_eff)
+    let offsets = (r1_eff - r1, r2 - r2_eff);
+    if !(offsets.0.is_finite() && offsets.1.is_finite()) {
+        // A fit with A ≥ 0 or B ≤ 0 has no effective radii: not a Couette profile.
+        eprintln!(
+            "wall_offsets: circular Couette fit A = {a:e}, B = {b:e} gives no effective radii"
+        );
+        std::process::exit(1);
+    }
+    offsets
 }
 
 fn main() {

@@ -104,6 +104,11 @@ pub fn channel_offset(yb: f64, yt: f64, ln: usize, lx: usize, tau: f64, tol: f64
             .sum::<f64>()
     };
     let target = channel_flux(yb, yt, ln, lx, tau, tol).ln();
+    // A flux that is not positive has no width: ln gives NaN, which the bisection would hide.
+    assert!(
+        target.is_finite() && refs.iter().all(|r| r.1.is_finite()),
+        "a channel flux is not positive: {target} and references {refs:?}"
+    );
     // ln Q rises with the width: bisection over the references' span.
     let (mut lo, mut hi) = (refs[0].0, refs[3].0);
     for _ in 0..100 {
