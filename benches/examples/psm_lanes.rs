@@ -131,10 +131,12 @@ fn main() {
                 solid: case.solid,
                 force: [0.0; 2],
                 collision: case.collision,
+                lambda: Default::default(),
             };
             let share = SolidShare {
                 fraction: case.fraction,
                 velocity: [1e-3, 2e-4],
+                wall_gradient: Default::default(),
             };
             let class = lane_class(&params, &[share]).expect("one share, ε > 0");
             let open = case.open;

@@ -20,7 +20,7 @@
 mod psm_cases;
 
 use lbdem_kernels::fluid::collide::LAMBDA_FRICTION;
-use lbdem_kernels::fluid::collide::{SolidOperator, Weighting};
+use lbdem_kernels::fluid::collide::{LambdaTerms, SolidOperator, Weighting};
 use psm_cases::{square_array, square_array_at, Fluid, Method};
 
 /// Cell side of the calibration set, nodes.
@@ -39,6 +39,7 @@ fn scatter() {
         fluid: Fluid::Bgk,
         solid: SolidOperator::NonEquilibriumBounceBack,
         weighting: Weighting::NobleTorczynski,
+        lambda: LambdaTerms::FRICTION_ONLY,
     };
     let methods = [
         ("ΩΛ + TRT, τ = 0.8", Method::LAMBDA, 0.8),

@@ -11,11 +11,20 @@
 #[path = "../tests/common/psm_cases.rs"]
 mod psm_cases;
 
-use lbdem_kernels::fluid::collide::{SolidOperator, Weighting};
+use lbdem_kernels::fluid::collide::{LambdaTerms, SolidOperator, Weighting};
 use psm_cases::{square_array, Fluid, Method, TAUS};
 
-fn operator_name(op: SolidOperator) -> &'static str {
-    op.symbol()
+/// The operator's symbol, with ΩΛ's constants.
+fn operator_name(m: Method) -> String {
+    if m.solid != SolidOperator::LambdaConsistent {
+        return m.solid.symbol().to_string();
+    }
+    let LambdaTerms { friction, pressure } = m.lambda;
+    if pressure == 0.0 {
+        format!("ΩΛ (κ = {friction})")
+    } else {
+        format!("ΩΛ (κ = {friction}, α = {pressure})")
+    }
 }
 
 fn weighting_name(w: Weighting) -> &'static str {
@@ -55,11 +64,13 @@ fn main() {
                     fluid,
                     solid: op,
                     weighting: Weighting::NobleTorczynski,
+                    lambda: LambdaTerms::FRICTION_ONLY,
                 });
             }
         }
     }
     if only.as_deref() != Some("bgk") {
+        methods.push(Method::LAMBDA_WALL);
         for weighting in [Weighting::SolidFraction, Weighting::NobleTorczynski] {
             methods.push(Method {
                 weighting,
@@ -87,7 +98,7 @@ fn main() {
                     let r = square_array(cell, c, tau, m);
                     eprintln!(
                         "{} {} {} c={c} τ={tau}: {:+.3} % ({} steps{})",
-                        operator_name(m.solid),
+                        operator_name(m),
                         m.fluid.name(),
                         weighting_name(m.weighting),
                         100.0 * r.error,
@@ -101,7 +112,7 @@ fn main() {
             let hi = errors.iter().cloned().fold(f64::NEG_INFINITY, f64::max);
             print!(
                 "| {} | {} | {} | {c} |",
-                operator_name(m.solid),
+                operator_name(m),
                 m.fluid.name(),
                 weighting_name(m.weighting)
             );

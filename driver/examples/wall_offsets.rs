@@ -6,7 +6,8 @@
 //! ```text
 //! cargo run --release -p lbdem --example wall_offsets [-- 0.8]
 //! ```
-//! (the optional argument is τ; the offsets do not depend on it). About a minute. Cases, all periodic, τ = 0.8:
+//! (the optional argument is τ; the offsets do not depend on it). About two minutes; each case in both forms of ΩΛ
+//! (friction only, the default, and the wall-pressure form, `LambdaTerms::WALL_PRESSURE`). Cases, all periodic, τ = 0.8:
 //! * **body-force channel**: plane Poiseuille flow along x between two solid slabs whose faces cut cell rows
 //!   (solid fractions ε of the cut cells given), driven by a uniform body force;
 //! * **pressure-driven section**: the same narrow channel over 80 of 320 columns, the rest a wide channel with
@@ -23,7 +24,7 @@ mod wall_cases;
 
 use lbdem::engine::lattice::FluidLattice;
 use lbdem_kernels::coverage::disc_cell_fraction;
-use lbdem_kernels::fluid::collide::LAMBDA_FRICTION;
+use lbdem_kernels::fluid::collide::LambdaTerms;
 use lbdem_kernels::math::Point;
 use wall_cases::{channel_offset, lattice, steady, G};
 
@@ -52,7 +53,7 @@ fn clipped_area(poly: &[[f64; 2]], n: [f64; 2], c: f64) -> f64 {
 
 /// Offset per wall of a body-force channel along the lattice direction (a, b) on an n × n periodic lattice:
 /// solid slabs of thickness `w` whose lower faces sit at s0 + k P along the normal (P = n/√(a² + b²)).
-fn inclined_offset(a: i64, b: i64, n: usize, w: f64, s0: f64, tau: f64) -> f64 {
+fn inclined_offset(a: i64, b: i64, n: usize, w: f64, s0: f64, tau: f64, terms: LambdaTerms) -> f64 {
     let len = ((a * a + b * b) as f64).sqrt();
     let d = [a as f64 / len, b as f64 / len];
     let normal = [-d[1], d[0]];
@@ -77,7 +78,16 @@ fn inclined_offset(a: i64, b: i64, n: usize, w: f64, s0: f64, tau: f64) -> f64 {
         })
         .collect();
     let nu = (tau - 0.5) / 3.0;
-    let mut l = lattice(n, n, tau, [G * d[0], G * d[1]], &eps, |_, _| [0.0; 2]);
+    let mut l = lattice(
+        n,
+        n,
+        tau,
+        [G * d[0], G * d[1]],
+        &eps,
+        |_, _| [0.0; 2],
+        |_, _| normal,
+        terms,
+    );
     let q = steady(&mut l, 1e-10, |l| {
         let (_, u) = l.moments();
         u.iter()
@@ -92,7 +102,7 @@ fn inclined_offset(a: i64, b: i64, n: usize, w: f64, s0: f64, tau: f64) -> f64 {
 
 /// Offsets (inner, outer) of circular Couette flow: a disc of radius `r1` spinning at Ω inside a fixed hole of
 /// radius `r2`, centre moved by `off` from the lattice's centre.
-fn couette_offsets(r1: f64, r2: f64, off: f64, tau: f64) -> (f64, f64) {
+fn couette_offsets(r1: f64, r2: f64, off: f64, tau: f64, terms: LambdaTerms) -> (f64, f64) {
     let n = (2.0 * r2).ceil() as usize + 6;
     let c = [
         0.5 * (n as f64 - 1.0) + off,
@@ -107,13 +117,32 @@ fn couette_offsets(r1: f64, r2: f64, off: f64, tau: f64) -> (f64, f64) {
             (inner(x, y) + 1.0 - disc_cell_fraction(centre, r2, x as f64, y as f64)).clamp(0.0, 1.0)
         })
         .collect();
-    let mut l = lattice(n, n, tau, [0.0; 2], &eps, |x, y| {
-        if inner(x, y) > 0.0 {
-            [-omega * (y as f64 - c[1]), omega * (x as f64 - c[0])]
+    // Both walls are circles about `c`: the radial direction is their normal.
+    let radial = |x: usize, y: usize| {
+        let (dx, dy) = (x as f64 - c[0], y as f64 - c[1]);
+        let r = dx.hypot(dy);
+        if r > 0.0 {
+            [dx / r, dy / r]
         } else {
             [0.0; 2]
         }
-    });
+    };
+    let mut l = lattice(
+        n,
+        n,
+        tau,
+        [0.0; 2],
+        &eps,
+        |x, y| {
+            if inner(x, y) > 0.0 {
+                [-omega * (y as f64 - c[1]), omega * (x as f64 - c[0])]
+            } else {
+                [0.0; 2]
+            }
+        },
+        radial,
+        terms,
+    );
     // Least squares of u_θ = A r + B/r over the nodes 1.5 spacings or more from both walls.
     let fit = |l: &FluidLattice<f64>| {
         let (_, u) = l.moments();
@@ -171,35 +200,47 @@ fn run() {
             std::process::exit(2);
         }
     };
-    println!("ΩΛ + TRT (Λ = 3/16), B = ε, κ = {LAMBDA_FRICTION}, τ = {tau}; offset per wall in lattice spacings, + = the solid acts thicker");
+    let forms = [LambdaTerms::FRICTION_ONLY, LambdaTerms::WALL_PRESSURE];
+    println!(
+        "ΩΛ + TRT (Λ = 3/16), B = ε, τ = {tau}; offset per wall in lattice spacings, + = the solid acts thicker; \
+         friction only (κ = {}) and the wall-pressure form (κ = {}, α = {})",
+        forms[0].friction, forms[1].friction, forms[1].pressure
+    );
     println!();
-    println!("| case | cut cells | offset per wall |");
-    println!("|---|---|---|");
+    println!("| case | cut cells | friction only | wall-pressure form |");
+    println!("|---|---|---|---|");
     for (yb, yt) in [(14.8f64, 25.1f64), (15.2, 25.9)] {
         let eb = yb - (yb.round() - 0.5);
         let et = yt.round() + 0.5 - yt;
         let cut = format!("ε = {eb:.1} / {et:.1}");
-        let body = channel_offset(yb, yt, 320, 320, tau, 1e-10);
+        let body = forms.map(|t| channel_offset(yb, yt, 320, 320, tau, 1e-10, t));
         println!(
-            "| body-force channel along x, H = {:.1} | {cut} | {body:+.4} |",
-            yt - yb
+            "| body-force channel along x, H = {:.1} | {cut} | {:+.4} | {:+.4} |",
+            yt - yb,
+            body[0],
+            body[1]
         );
-        let pressure = channel_offset(yb, yt, 80, 320, tau, 1e-10);
+        let pressure = forms.map(|t| channel_offset(yb, yt, 80, 320, tau, 1e-10, t));
         println!(
-            "| pressure-driven section (80 of 320 columns), H = {:.1} | {cut} | {pressure:+.4} |",
-            yt - yb
+            "| pressure-driven section (80 of 320 columns), H = {:.1} | {cut} | {:+.4} | {:+.4} |",
+            yt - yb,
+            pressure[0],
+            pressure[1]
         );
     }
     for (a, b, n) in [(2, 1, 45), (1, 1, 30)] {
         for s0 in [0.0, 0.3] {
-            let off = inclined_offset(a, b, n, 4.1, s0, tau);
+            let off = forms.map(|t| inclined_offset(a, b, n, 4.1, s0, tau, t));
             let h = n as f64 / ((a * a + b * b) as f64).sqrt() - 4.1;
-            println!("| body-force channel along ({a}, {b}), H = {h:.1} | slab face at s₀ = {s0} | {off:+.4} |");
+            println!(
+                "| body-force channel along ({a}, {b}), H = {h:.1} | slab face at s₀ = {s0} | {:+.4} | {:+.4} |",
+                off[0], off[1]
+            );
         }
     }
     for off in [0.0, 0.41] {
-        let (inner, outer) = couette_offsets(10.3, 20.3, off, tau);
-        println!("| circular Couette, convex wall R₁ = 10.3 (turning) | centre moved {off} | {inner:+.4} |");
-        println!("| circular Couette, concave wall R₂ = 20.3 (fixed) | centre moved {off} | {outer:+.4} |");
+        let [(i0, o0), (i1, o1)] = forms.map(|t| couette_offsets(10.3, 20.3, off, tau, t));
+        println!("| circular Couette, convex wall R₁ = 10.3 (turning) | centre moved {off} | {i0:+.4} | {i1:+.4} |");
+        println!("| circular Couette, concave wall R₂ = 20.3 (fixed) | centre moved {off} | {o0:+.4} | {o1:+.4} |");
     }
 }

@@ -87,6 +87,17 @@ pub fn rigid_velocity<T: Real>(body: &CoupledBody<T>, x: Point<T>) -> Vector<T> 
     )
 }
 
+/// The unit outward normal of the body's boundary "at" point `x`: the gradient of the body's implicit function
+/// there, normalised — for a disc the radial direction (x − X)/|x − X|, for an ellipse with semi-axes a, b
+/// along the unit vectors e₁, e₂ the direction of (d·e₁/a²) e₁ + (d·e₂/b²) e₂, d = x − X (normal to the
+/// confocal level curve through x, which is the boundary's normal where x lies on it). Zero at the centre
+/// (no direction), and for a degenerate shape (a zero semi-axis). Used for the wall direction of the cells the
+/// body cuts ([`crate::fluid::collide::wall_gradient`]).
+#[inline]
+pub fn surface_normal<T: Real>(body: &CoupledBody<T>, x: Point<T>) -> Vector<T> {
+    PreparedBody::new(body).surface_normal(x)
+}
+
 /// Fraction of the unit cell centred on node (x, y) covered by the body, in [0, 1] (exact area).
 #[inline]
 pub fn body_cell_fraction<T: Real>(body: &CoupledBody<T>, x: T, y: T) -> T {
@@ -118,6 +129,36 @@ impl<T: Real> PreparedBody<T> {
         Self {
             body: *body,
             sin_cos,
+        }
+    }
+
+    /// The unit outward normal of the body at point `x` (= [`surface_normal`]).
+    #[inline]
+    pub fn surface_normal(&self, x: Point<T>) -> Vector<T> {
+        let b = &self.body;
+        let d = [x[0] - b.center[0], x[1] - b.center[1]];
+        let g = match b.shape {
+            BodyShape::Disc { .. } => d,
+            BodyShape::Ellipse {
+                semi_major,
+                semi_minor,
+                ..
+            } => {
+                let (sin, cos) = self.sin_cos;
+                let (q1, q2) = (d[0] * cos + d[1] * sin, -d[0] * sin + d[1] * cos);
+                let (a2, b2) = (semi_major * semi_major, semi_minor * semi_minor);
+                if !(a2 > T::zero() && b2 > T::zero()) {
+                    return Vector::zeros();
+                }
+                let (g1, g2) = (q1 / a2, q2 / b2);
+                [g1 * cos - g2 * sin, g1 * sin + g2 * cos]
+            }
+        };
+        let norm = (g[0] * g[0] + g[1] * g[1]).sqrt();
+        if norm > T::zero() && norm.is_finite() {
+            Vector::new(g[0] / norm, g[1] / norm)
+        } else {
+            Vector::zeros()
         }
     }
 

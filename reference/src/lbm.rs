@@ -229,6 +229,12 @@ pub struct Solid {
     pub fraction: f64,
     /// Rigid-body velocity of the solid at the node.
     pub velocity: [f64; 2],
+    /// Unit outward normal of the solid's surface at the node (zero: no direction): [`step`] derives
+    /// `wall_gradient` from it for ΩΛ.
+    pub normal: [f64; 2],
+    /// The density gradient along the solid's surface at the node, read by [`psm_lambda`] at partly covered
+    /// nodes (its wall-pressure force); [`step`] overwrites it from the streamed densities and `normal`.
+    pub wall_gradient: [f64; 2],
 }
 
 /// Noble–Torczynski partially-saturated collision of one node with solids `solids` (non-equilibrium
@@ -355,6 +361,14 @@ pub fn psm_with_collision(
 /// ΩΛ's friction constant κ (`lbdem_kernels::fluid::collide::LAMBDA_FRICTION`, restated).
 pub const LAMBDA_FRICTION: f64 = 1.21;
 
+/// ΩΛ's wall-pressure constant α (`lbdem_kernels::fluid::collide::LAMBDA_PRESSURE`, restated): a partly
+/// covered node's fluid gets (ε_s/Σε) α B c_s² ∇ₜρ_s from each solid s, which takes the opposite.
+pub const LAMBDA_PRESSURE: f64 = 2.0;
+
+/// ΩΛ's friction constant in its wall-pressure form (`lbdem_kernels::fluid::collide::LAMBDA_WALL_FRICTION`,
+/// restated).
+pub const LAMBDA_WALL_FRICTION: f64 = 0.45;
+
 /// ΩΛ's full-cover threshold: a node whose fractions sum to at least 1 − this gap takes the fully covered rule
 /// (the operator's definition, fixed at 0.05 where the partly covered rule was measured to destabilise free
 /// grains and packs of them: lbdem-kernels `fluid::collide::LAMBDA_FULL_GAP`, whose doc gives the measurements).
@@ -369,9 +383,12 @@ pub const LAMBDA_FULL_GAP: f64 = 0.05;
 ///   direction among them) get the remaining mass ρ − Σ_open P_i in proportion to f^eq(1, u_s); the node takes
 ///   Σ_s (ε_s/Σε) P_s and solid s receives −(ε_s/Σε) Σ_i c_i (P_{s,i} − f_i).
 /// * otherwise (0 < Σ ε_s < 1 − [`LAMBDA_FULL_GAP`]), with Λ⁺ = τ − ½, Λ⁻ = τ⁻ − ½, B = ε (or ε√(Λ⁺Λ⁻)/((1 − ε) + √(Λ⁺Λ⁻)) for the NT weighting):
-///   TRT with τ⁺_loc = ½ + Λ⁺/(1 − B), τ⁻_loc = ½ + Λ⁻(1 − B) and the force F = (1 − B) F_body + Σ_s F_s,
+///   TRT with τ⁺_loc = ½ + Λ⁺/(1 − B), τ⁻_loc = ½ + Λ⁻(1 − B) and the force F = F_e + Σ_s F_s, where
+///   F_e = (1 − B) F_body + Σ_s P_s with the wall-pressure forces P_s = (ε_s/Σε) α B ∇ₜρ_s / 3
+///   (α and κ the last argument, ∇ₜρ_s = `wall_gradient`), and the frictions
 ///   F_s = −κ Λ⁺ B (ε_s/Σε) ρ (u − u_s), u the velocity of that forced collision, u = (Σ f c + F/2)/ρ (solved:
-///   u (1 + κΛ⁺B/2) = (Σ f c + (1 − B) F_body/2)/ρ + Σ_s κΛ⁺B (ε_s/Σε) u_s/2); solid s receives −F_s.
+///   u (1 + κΛ⁺B/2) = (Σ f c + F_e/2)/ρ + Σ_s κΛ⁺B (ε_s/Σε) u_s/2); solid s receives −(F_s + P_s).
+#[allow(clippy::too_many_arguments)]
 pub fn psm_lambda(
     f: &Populations,
     tau: f64,
@@ -380,6 +397,7 @@ pub fn psm_lambda(
     force: [f64; 2],
     solids: &[Solid],
     open: [bool; Q],
+    (kappa, alpha): (f64, f64),
 ) -> (Populations, Vec<[f64; 2]>) {
     let eps: f64 = solids.iter().map(|s| s.fraction).sum();
     if eps <= 0.0 {
@@ -428,8 +446,17 @@ pub fn psm_lambda(
             eps * a / ((1.0 - eps) + a)
         }
     };
-    let beta = LAMBDA_FRICTION * lambda_plus * b;
-    let body = [(1.0 - b) * force[0], (1.0 - b) * force[1]];
+    let beta = kappa * lambda_plus * b;
+    let push = |s: &Solid| {
+        let k = s.fraction / eps * alpha * b / 3.0;
+        [k * s.wall_gradient[0], k * s.wall_gradient[1]]
+    };
+    let mut body = [(1.0 - b) * force[0], (1.0 - b) * force[1]];
+    for s in solids {
+        let p = push(s);
+        body[0] += p[0];
+        body[1] += p[1];
+    }
     let j = momentum(f);
     let mut u = [0.0; 2];
     for a in 0..2 {
@@ -448,7 +475,8 @@ pub fn psm_lambda(
         ];
         total[0] += fs[0];
         total[1] += fs[1];
-        exchange.push([-fs[0], -fs[1]]);
+        let p = push(s);
+        exchange.push([-(fs[0] + p[0]), -(fs[1] + p[1])]);
     }
     let post = trt_forced_times(
         f,
@@ -457,6 +485,39 @@ pub fn psm_lambda(
         total,
     );
     (post, exchange)
+}
+
+/// ΩΛ's density gradient along a wall at node (x, y) with unit normal `normal`: (t·g) t, t = (−n_y, n_x), g the
+/// gradient of the streamed densities `rho` by central differences along each axis where both axis neighbours'
+/// links are `open`, one-sided where one is, zero where neither.
+pub fn wall_gradient(
+    lat: &Lattice,
+    sides: &Sides,
+    rho: &[f64],
+    open: &[bool; Q],
+    x: usize,
+    y: usize,
+    normal: [f64; 2],
+) -> [f64; 2] {
+    let here = rho[lat.index(x, y)];
+    let at = |q: usize| {
+        if open[q] {
+            lat.destination(x, y, q, sides).map(|j| rho[j])
+        } else {
+            None
+        }
+    };
+    let axis = |plus: Option<f64>, minus: Option<f64>| match (plus, minus) {
+        (Some(p), Some(m)) => (p - m) / 2.0,
+        (Some(p), None) => p - here,
+        (None, Some(m)) => here - m,
+        (None, None) => 0.0,
+    };
+    // D2Q9 directions 1–4: +x, +y, −x, −y.
+    let g = [axis(at(1), at(3)), axis(at(2), at(4))];
+    let t = [-normal[1], normal[0]];
+    let along = t[0] * g[0] + t[1] * g[1];
+    [along * t[0], along * t[1]]
 }
 
 /// The open links of node (x, y) for ΩΛ: `open[i]` when x + c_i is inside the lattice (wrapping across
@@ -694,6 +755,8 @@ pub struct Params {
     pub magic: Option<f64>,
     /// Covered nodes use ΩΛ ([`psm_lambda`]) instead of Ω₁.
     pub lambda_consistent: bool,
+    /// ΩΛ's (κ, α): ([`LAMBDA_FRICTION`], 0) or ([`LAMBDA_WALL_FRICTION`], [`LAMBDA_PRESSURE`]).
+    pub lambda_terms: (f64, f64),
 }
 
 impl Lattice {
@@ -937,6 +1000,7 @@ pub fn step_with_profiles(
         full[cov.node] =
             cov.solids.iter().map(|s| s.fraction).sum::<f64>() >= 1.0 - LAMBDA_FULL_GAP;
     }
+    let rho: Vec<f64> = streamed.iter().map(density).collect();
     for cov in covered {
         if lat.solid[cov.node] {
             forces.push(vec![[0.0, 0.0]; cov.solids.len()]);
@@ -944,14 +1008,24 @@ pub fn step_with_profiles(
         }
         if params.lambda_consistent {
             let (x, y) = (cov.node % lat.nx, cov.node / lat.nx);
+            let open = open_links(lat, sides, &full, x, y);
+            let solids: Vec<Solid> = cov
+                .solids
+                .iter()
+                .map(|s| Solid {
+                    wall_gradient: wall_gradient(lat, sides, &rho, &open, x, y, s.normal),
+                    ..*s
+                })
+                .collect();
             let (f, ex) = psm_lambda(
                 &streamed[cov.node],
                 params.tau,
                 params.magic,
                 params.weighting,
                 params.force,
-                &cov.solids,
-                open_links(lat, sides, &full, x, y),
+                &solids,
+                open,
+                params.lambda_terms,
             );
             next.f[cov.node] = f;
             forces.push(ex);

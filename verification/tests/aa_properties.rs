@@ -169,6 +169,7 @@ fn random_problem(nx: usize, ny: usize, seed: u64, force_kind: usize) -> Problem
                 shares.push(SolidShare {
                     fraction: rng.unit(),
                     velocity: rng.velocity(0.05),
+                    wall_gradient: Default::default(),
                 });
             }
             covered.push(node as u32);
@@ -201,6 +202,7 @@ fn random_problem(nx: usize, ny: usize, seed: u64, force_kind: usize) -> Problem
             force,
             solid,
             collision,
+            lambda: Default::default(),
         },
         collision,
         covered,
@@ -580,9 +582,10 @@ proptest! {
             } else {
                 Collision::Trt(Trt::new(rng.range(0.05, 0.6)).expect("positive magic parameter"))
             },
+            lambda: Default::default(),
         };
         let shares: Vec<SolidShare<f64>> = (0..shares)
-            .map(|_| SolidShare { fraction: rng.unit(), velocity: rng.velocity(0.05) })
+            .map(|_| SolidShare { fraction: rng.unit(), velocity: rng.velocity(0.05) , wall_gradient: Default::default() })
             .collect();
         let mut f = f0;
         let mut exchange = vec![[f64::NAN; 2]; shares.len()];

@@ -11,8 +11,8 @@
 //! body, the reach of a scaled body, a quarter turn, which permutes and negates exactly) it is compared
 //! bitwise.
 use lbdem_kernels::coupling::{
-    body_cell_fraction, body_cell_range, reduce_exchange, rigid_velocity, BodyShape, CoupledBody,
-    PreparedBody,
+    body_cell_fraction, body_cell_range, reduce_exchange, rigid_velocity, surface_normal,
+    BodyShape, CoupledBody, PreparedBody,
 };
 use lbdem_kernels::coverage::{disc_cell_fraction, ellipse_cell_fraction};
 use lbdem_kernels::math::{Point, Vector};
@@ -475,5 +475,40 @@ fn minimum_image_keeps_half_a_period_and_ignores_non_positive_periods() {
             -25.0,
             "period {bad}: no wrap"
         );
+    }
+}
+
+proptest! {
+    #![proptest_config(config(512))]
+
+    /// `surface_normal` at a point of the body's boundary, written as the centre plus R(θ)(a cos φ, b sin φ), is the
+    /// unit outward normal there: of unit length, perpendicular to the boundary's tangent R(θ)(−a sin φ, b cos φ)
+    /// (the derivative of that parametrisation, written independently of the kernel's implicit-function gradient),
+    /// pointing away from the centre; the prepared form gives the same bits; at the centre it is zero.
+    ///
+    /// Tolerance: the point is formed from coordinates up to 50 and the kernel subtracts the centre again, so the
+    /// offset carries up to 50·2⁻⁵² ≈ 1e-14 absolute error on a semi-axis as small as 0.005, 2e-12 relative, and
+    /// the gradient scales its components by up to (a/b)² = 100: 1e-8 covers that with room.
+    #[test]
+    fn surface_normal_is_the_unit_outward_normal_of_the_boundary(b in body(), phi in 0.0f64..(2.0 * PI)) {
+        let (a, bb, angle) = match b.shape {
+            BodyShape::Disc { radius } => (radius, radius, 0.0),
+            BodyShape::Ellipse { semi_major, semi_minor, angle } => (semi_major, semi_minor, angle),
+        };
+        let (sin, cos) = angle.sin_cos();
+        let rot = |v: [f64; 2]| [v[0] * cos - v[1] * sin, v[0] * sin + v[1] * cos];
+        let offset = rot([a * phi.cos(), bb * phi.sin()]);
+        let tangent = rot([-a * phi.sin(), bb * phi.cos()]);
+        let point = Point::new(b.center[0] + offset[0], b.center[1] + offset[1]);
+        let n = surface_normal(&b, point);
+        prop_assert!((n.norm() - 1.0).abs() <= 1e-12, "length {}", n.norm());
+        let t_len = tangent[0].hypot(tangent[1]);
+        let along = (n[0] * tangent[0] + n[1] * tangent[1]) / t_len;
+        prop_assert!(along.abs() <= 1e-8, "normal {n:?} against tangent {tangent:?}: {along}");
+        prop_assert!(n[0] * offset[0] + n[1] * offset[1] > 0.0, "points inwards");
+        let prepared = PreparedBody::new(&b).surface_normal(point);
+        prop_assert_eq!(prepared[0].to_bits(), n[0].to_bits());
+        prop_assert_eq!(prepared[1].to_bits(), n[1].to_bits());
+        prop_assert_eq!(surface_normal(&b, b.center), Vector::zeros());
     }
 }

@@ -17,7 +17,7 @@
 //!   Whole steps are single steps, so errors do not compound.
 //! * Bitwise (`to_bits`) where the claim is exact: PSM with ε = 0 versus BGK, streaming as a permutation,
 //!   band splitting.
-use lbdem_kernels::fluid::aa::{load_from_rows, store_in_rows, AaStep};
+use lbdem_kernels::fluid::aa::{load_from_rows, store_in_rows, AaStep, Layout};
 use lbdem_kernels::fluid::boundary::{
     radiating_density, zou_he, zou_he_corner, zou_he_known_sum, Boundaries, SideCondition,
     SideProfiles,
@@ -25,15 +25,15 @@ use lbdem_kernels::fluid::boundary::{
 use lbdem_kernels::fluid::collide::{
     bgk_collide, bgk_collide_forced, bgk_collide_slices, fluid_collide, lane_class, psm_collide,
     psm_collide_links, psm_velocity, trt_collide, trt_collide_forced, Collision, CollisionError,
-    OpenLinks, PsmParams, SolidOperator, SolidShare, Trt, Weighting, ALL_LINKS_OPEN,
+    LambdaTerms, OpenLinks, PsmParams, SolidOperator, SolidShare, Trt, Weighting, ALL_LINKS_OPEN,
 };
 use lbdem_kernels::fluid::d2q9::{density, equilibrium, momentum, second_moment, OPPOSITE, Q};
 use lbdem_kernels::fluid::lattice::{LatticeShape, Side};
 use lbdem_kernels::fluid::step::{
     band_mut, classify_special_nodes, collide_covered_list, collide_covered_nodes,
     collide_planned_row, gather_node, gathered_moments, nodes_in_rows, open_links,
-    plan_covered_row, planes, planes_mut, step_band, stream_periodic, CoveredNodes, Domain,
-    FluidParams, FLUID, PLAN_GROUPS, SOLID,
+    plan_covered_row, planes, planes_mut, step_band, stream_periodic, wall_gradients, CoveredNodes,
+    Domain, FluidParams, FLUID, PLAN_GROUPS, SOLID,
 };
 use lbdem_kernels::Real;
 use lbdem_reference::analytic;
@@ -132,9 +132,30 @@ fn shares() -> impl Strategy<Value = Vec<SolidShare<f64>>> {
             .map(|_| SolidShare {
                 fraction: rng.fraction(),
                 velocity: rng.velocity(),
+                // ΩΛ's wall-pressure input: none, or a density gradient of the size a pressure-driven pore flow
+                // has (≤ 1e-2 per spacing).
+                wall_gradient: if rng.chance(0.5) {
+                    [rng.range(-1e-2, 1e-2), rng.range(-1e-2, 1e-2)]
+                } else {
+                    [0.0; 2]
+                },
             })
             .collect()
     })
+}
+
+/// A wall direction for share `k` of covered node `node` in the lattice-step comparisons, the same for the
+/// kernels and the reference: none for one share in four, otherwise a unit vector at an angle spread over the
+/// circle by the indices.
+fn test_normal(node: u32, k: usize) -> [f64; 2] {
+    let h = (node as u64)
+        .wrapping_mul(0x9e37_79b9_7f4a_7c15)
+        .wrapping_add(k as u64 * 0x6a09_e667);
+    if h.is_multiple_of(4) {
+        return [0.0; 2];
+    }
+    let angle = (h >> 11) as f64 / (1u64 << 53) as f64 * std::f64::consts::TAU;
+    [angle.cos(), angle.sin()]
 }
 
 fn to_reference_weighting(w: Weighting) -> reference::Weighting {
@@ -150,6 +171,8 @@ fn to_reference_solids(shares: &[SolidShare<f64>]) -> Vec<reference::Solid> {
         .map(|s| reference::Solid {
             fraction: s.fraction,
             velocity: s.velocity,
+            normal: [0.0; 2],
+            wall_gradient: s.wall_gradient,
         })
         .collect()
 }
@@ -242,7 +265,7 @@ proptest! {
             (SolidOperator::MovingWallBounceBack, reference::SolidOp::MovingWallBounceBack),
             (SolidOperator::LinearizedNonEquilibriumBounceBack, reference::SolidOp::LinearizedNonEquilibriumBounceBack),
         ][op];
-        let params = PsmParams { tau, weighting: w, force, solid, collision: Collision::Bgk };
+        let params = PsmParams { tau, weighting: w, force, solid, collision: Collision::Bgk, lambda: Default::default() };
         let mut g = f;
         let mut exchange = vec![[f64::NAN; 2]; shares.len()];
         let b = psm_collide(&mut g, &params, &shares, &mut exchange);
@@ -285,10 +308,10 @@ proptest! {
         forced in any::<bool>(), force in force(),
     ) {
         let force = if forced { force } else { [0.0; 2] };
-        let shares = vec![SolidShare { fraction: 0.0, velocity: u_s }; n];
+        let shares = vec![SolidShare { fraction: 0.0, velocity: u_s , wall_gradient: Default::default() }; n];
         let mut exchange = vec![[f64::NAN; 2]; n];
         let mut g = f;
-        let b = psm_collide(&mut g, &PsmParams { tau, weighting: w, force, solid: SolidOperator::NonEquilibriumBounceBack, collision: Collision::Bgk }, &shares, &mut exchange);
+        let b = psm_collide(&mut g, &PsmParams { tau, weighting: w, force, solid: SolidOperator::NonEquilibriumBounceBack, collision: Collision::Bgk, lambda: Default::default() }, &shares, &mut exchange);
         let mut h = f;
         if forced {
             bgk_collide_forced(&mut h, 1.0 / tau, force);
@@ -337,6 +360,7 @@ fn psm_force_on_a_fully_covered_node_drags_the_solid_along() {
     let shares = [SolidShare {
         fraction: 1.0,
         velocity: u_s,
+        wall_gradient: Default::default(),
     }];
     let params = PsmParams {
         tau: 0.8,
@@ -344,6 +368,7 @@ fn psm_force_on_a_fully_covered_node_drags_the_solid_along() {
         force: [0.0; 2],
         solid: SolidOperator::NonEquilibriumBounceBack,
         collision: Collision::Bgk,
+        lambda: Default::default(),
     };
     let b = psm_collide(&mut f, &params, &shares, &mut ex);
     assert_eq!(b, 1.0);
@@ -364,6 +389,7 @@ fn psm_bounce_back_operator_at_full_cover_is_moving_wall_bounce_back() {
         let shares = [SolidShare {
             fraction: 1.0,
             velocity: u_s,
+            wall_gradient: Default::default(),
         }];
         let params = PsmParams {
             tau: 0.7,
@@ -371,6 +397,7 @@ fn psm_bounce_back_operator_at_full_cover_is_moving_wall_bounce_back() {
             force: [0.0; 2],
             solid: SolidOperator::MovingWallBounceBack,
             collision: Collision::Bgk,
+            lambda: Default::default(),
         };
         psm_collide(&mut f, &params, &shares, &mut ex);
         let rho = density(&f0);
@@ -421,6 +448,7 @@ fn linearized_operator_at_full_cover_moves_with_the_solid_and_keeps_the_rest_pop
         let shares = [SolidShare {
             fraction: 1.0,
             velocity: u_s,
+            wall_gradient: Default::default(),
         }];
         let params = PsmParams {
             tau: 0.7,
@@ -428,6 +456,7 @@ fn linearized_operator_at_full_cover_moves_with_the_solid_and_keeps_the_rest_pop
             force: [0.0; 2],
             solid: SolidOperator::LinearizedNonEquilibriumBounceBack,
             collision: Collision::Bgk,
+            lambda: Default::default(),
         };
         psm_collide(&mut f, &params, &shares, &mut ex);
         assert_eq!(f[0], f0[0], "rest population must be untouched");
@@ -527,6 +556,7 @@ fn random_problem(nx: usize, ny: usize, seed: u64, p_solid: f64, p_covered: f64)
                 .map(|_| SolidShare {
                     fraction: rng.fraction(),
                     velocity: rng.velocity(),
+                    wall_gradient: Default::default(),
                 })
                 .collect();
             covered.push((node as u32, shares));
@@ -662,6 +692,7 @@ fn kernel_step<T: Real>(
             SolidOperator::NonEquilibriumBounceBack
         },
         collision,
+        lambda: lambda_terms_of(p),
     };
     // Compressed-row coverage.
     let nodes: Vec<u32> = p.covered.iter().map(|(n, _)| *n).collect();
@@ -671,6 +702,7 @@ fn kernel_step<T: Real>(
         shares.extend(s.iter().map(|s| SolidShare {
             fraction: T::lit(s.fraction),
             velocity: s.velocity.map(T::lit),
+            wall_gradient: Default::default(),
         }));
         offsets.push(shares.len() as u32);
     }
@@ -691,6 +723,24 @@ fn kernel_step<T: Real>(
             open_links(&shape, &bc, &flags, x, y, |j| full[j])
         })
         .collect();
+    if p.lambda && with_coverage && psm.lambda.pressure != 0.0 {
+        // ΩΛ's wall gradients from the state the step gathers (what the driver does before each step).
+        let mut normals = Vec::with_capacity(shares.len());
+        for (k, &n) in nodes.iter().enumerate() {
+            let count = (offsets[k + 1] - offsets[k]) as usize;
+            normals.extend((0..count).map(|j| test_normal(n, j).map(T::lit)));
+        }
+        wall_gradients(
+            &domain,
+            &src,
+            Layout::Collided,
+            &nodes,
+            &offsets,
+            &links,
+            &normals,
+            &mut shares,
+        );
+    }
     let mut exchange = vec![[T::nan(); 2]; shares.len()];
     let mut rows = vec![0];
     rows.extend_from_slice(cuts);
@@ -744,13 +794,24 @@ fn reference_step(p: &Problem, with_coverage: bool) -> (reference::Lattice, Vec<
         weighting: to_reference_weighting(p.weighting),
         magic: p.magic,
         lambda_consistent: p.lambda,
+        lambda_terms: {
+            let t = lambda_terms_of(p);
+            (t.friction, t.pressure)
+        },
     };
     let covered: Vec<reference::Covered> = if with_coverage {
         p.covered
             .iter()
             .map(|(n, s)| reference::Covered {
                 node: *n as usize,
-                solids: to_reference_solids(s),
+                solids: to_reference_solids(s)
+                    .into_iter()
+                    .enumerate()
+                    .map(|(k, s)| reference::Solid {
+                        normal: test_normal(*n, k),
+                        ..s
+                    })
+                    .collect(),
             })
             .collect()
     } else {
@@ -1393,7 +1454,7 @@ proptest! {
             (SolidOperator::MovingWallBounceBack, reference::SolidOp::MovingWallBounceBack),
             (SolidOperator::LinearizedNonEquilibriumBounceBack, reference::SolidOp::LinearizedNonEquilibriumBounceBack),
         ][op];
-        let params = PsmParams { tau, weighting: w, force, solid, collision: trt(magic) };
+        let params = PsmParams { tau, weighting: w, force, solid, collision: trt(magic), lambda: Default::default() };
         let mut g = f;
         let mut exchange = vec![[f64::NAN; 2]; shares.len()];
         let b = psm_collide(&mut g, &params, &shares, &mut exchange);
@@ -1422,11 +1483,12 @@ proptest! {
     ) {
         let force = if forced { force } else { [0.0; 2] };
         let c = trt(magic);
-        let shares = vec![SolidShare { fraction: 0.0, velocity: u_s }; n];
+        let shares = vec![SolidShare { fraction: 0.0, velocity: u_s , wall_gradient: Default::default() }; n];
         let mut exchange = vec![[f64::NAN; 2]; n];
         let params = PsmParams {
             tau, weighting: Weighting::NobleTorczynski, force, solid: SolidOperator::NonEquilibriumBounceBack,
             collision: c,
+            lambda: Default::default(),
         };
         let mut g = f;
         prop_assert_eq!(psm_collide(&mut g, &params, &shares, &mut exchange), 0.0);
@@ -1635,6 +1697,22 @@ fn lambda_params(tau: f64, w: Weighting, force: [f64; 2], magic: Option<f64>) ->
         force,
         solid: SolidOperator::LambdaConsistent,
         collision: collision_of(magic),
+        // Both forms of ΩΛ over the cases: the wall-pressure one above τ = 1.25.
+        lambda: if tau > 1.25 {
+            LambdaTerms::WALL_PRESSURE
+        } else {
+            LambdaTerms::FRICTION_ONLY
+        },
+    }
+}
+
+/// ΩΛ's constants of a lattice-step problem, the same for the kernels and the reference: the wall-pressure form
+/// above τ = 1.25, friction only below, so both are exercised.
+fn lambda_terms_of(p: &Problem) -> LambdaTerms {
+    if p.tau > 1.25 {
+        LambdaTerms::WALL_PRESSURE
+    } else {
+        LambdaTerms::FRICTION_ONLY
     }
 }
 
@@ -1663,6 +1741,7 @@ proptest! {
         }
         let (r, ex) = reference::psm_lambda(
             &f, tau, magic, to_reference_weighting(w), force, &to_reference_solids(&shares), open_bools(open),
+            (params.lambda.friction, params.lambda.pressure),
         );
         prop_assert!(max_abs_diff(&g, &r) <= ORACLE * scale(&f), "{g:?}\nvs {r:?}");
         for (k, e) in exchange.iter().zip(&ex) {
@@ -1708,7 +1787,7 @@ proptest! {
     ) {
         let force = if forced { force } else { [0.0; 2] };
         let params = lambda_params(tau, Weighting::SolidFraction, force, magic);
-        let shares = vec![SolidShare { fraction: 0.0, velocity: u_s }; n];
+        let shares = vec![SolidShare { fraction: 0.0, velocity: u_s , wall_gradient: Default::default() }; n];
         let mut exchange = vec![[f64::NAN; 2]; n];
         let mut g = f;
         prop_assert_eq!(psm_collide_links(&mut g, &params, &shares, open, &mut exchange), 0.0);
@@ -1730,11 +1809,11 @@ proptest! {
         let tol = ROUNDOFF * scale(&f);
         let mut g = f;
         let mut ex = [[0.0; 2]; 1];
-        psm_collide_links(&mut g, &params, &[SolidShare { fraction: 1.0, velocity: u_s }], 0, &mut ex);
+        psm_collide_links(&mut g, &params, &[SolidShare { fraction: 1.0, velocity: u_s , wall_gradient: Default::default() }], 0, &mut ex);
         let want = equilibrium(density(&f), u_s);
         prop_assert!(max_abs_diff(&g, &want) <= tol, "{g:?} vs {want:?}");
         let mut h = f;
-        psm_collide_links(&mut h, &params, &[SolidShare { fraction: 1.0, velocity: [0.0; 2] }], ALL_LINKS_OPEN, &mut ex);
+        psm_collide_links(&mut h, &params, &[SolidShare { fraction: 1.0, velocity: [0.0; 2], wall_gradient: Default::default() }], ALL_LINKS_OPEN, &mut ex);
         // The rest population gets the mass that remains, ρ − Σ_{i≠0} f_ī = f₀ up to roundoff.
         for i in 0..Q {
             prop_assert!((h[i] - f[OPPOSITE[i]]).abs() <= tol, "direction {i}");
@@ -1983,6 +2062,7 @@ fn random_covered_list(
         solid,
         force,
         collision,
+        lambda: Default::default(),
     };
     let n = rng.below(60);
     let (mut f, mut offsets, mut shares, mut links) =
@@ -2006,6 +2086,7 @@ fn random_covered_list(
             shares.push(SolidShare {
                 fraction,
                 velocity: rng.velocity(),
+                wall_gradient: Default::default(),
             });
         }
         offsets.push(shares.len() as u32);
@@ -2031,6 +2112,7 @@ fn check_batched<T: Real>(seed: u64) -> Result<(), TestCaseError> {
             Collision::Bgk => Collision::Bgk,
             Collision::Trt(t) => Collision::Trt(Trt::new(T::lit(t.magic())).expect("valid")),
         },
+        lambda: Default::default(),
     };
     let f: Vec<Option<[T; Q]>> = f.iter().map(|g| g.map(|g| g.map(T::lit))).collect();
     let shares: Vec<SolidShare<T>> = shares
@@ -2038,6 +2120,7 @@ fn check_batched<T: Real>(seed: u64) -> Result<(), TestCaseError> {
         .map(|s| SolidShare {
             fraction: T::lit(s.fraction),
             velocity: s.velocity.map(T::lit),
+            wall_gradient: Default::default(),
         })
         .collect();
     let first = offsets[0] as usize;
@@ -2148,12 +2231,14 @@ fn check_row<T: Real>(seed: u64) -> Result<(), TestCaseError> {
             Collision::Bgk => Collision::Bgk,
             Collision::Trt(t) => Collision::Trt(Trt::new(T::lit(t.magic())).expect("valid")),
         },
+        lambda: Default::default(),
     };
     let shares: Vec<SolidShare<T>> = shares
         .iter()
         .map(|s| SolidShare {
             fraction: T::lit(s.fraction),
             velocity: s.velocity.map(T::lit),
+            wall_gradient: Default::default(),
         })
         .collect();
     // A row of populations near equilibrium, plane by plane.
@@ -2278,5 +2363,36 @@ proptest! {
     fn batched_covered_collision_is_bitwise_the_node_kernel(seed in any::<u64>()) {
         check_batched::<f64>(seed)?;
         check_batched::<f32>(seed)?;
+    }
+}
+
+proptest! {
+    /// ΩΛ's wall gradient ([`lbdem_kernels::fluid::collide::wall_gradient`]) of a linear density field
+    /// ρ = ρ₀ + g·(x − x₀) sampled at the axis neighbours that are given: along an axis with both neighbours or
+    /// one, the difference is exact for a linear field, so the result is (t·g') t with g' the gradient whose
+    /// components are zero along axes with no neighbour and t ⟂ the normal; it has no normal component; with
+    /// no normal it is zero. Tolerance: ρ ≈ 1 and differences of a few such values carry a few ulp of 1,
+    /// 1e-15.
+    #[test]
+    fn wall_gradient_is_the_tangential_part_of_a_linear_density_field(
+        rho0 in 0.8f64..1.2, g in [-1e-2f64..1e-2, -1e-2f64..1e-2], angle in 0.0f64..std::f64::consts::TAU,
+        mask in 0u8..16, no_normal in any::<bool>(),
+    ) {
+        use lbdem_kernels::fluid::collide::wall_gradient;
+        let dirs = [[1.0, 0.0], [0.0, 1.0], [-1.0, 0.0], [0.0, -1.0]];
+        let neighbours: [Option<f64>; 4] = std::array::from_fn(|i| {
+            (mask & (1 << i) != 0).then(|| rho0 + g[0] * dirs[i][0] + g[1] * dirs[i][1])
+        });
+        let normal = if no_normal { [0.0; 2] } else { [angle.cos(), angle.sin()] };
+        let got = wall_gradient(rho0, neighbours, normal);
+        let seen = [
+            if mask & 0b0101 != 0 { g[0] } else { 0.0 },
+            if mask & 0b1010 != 0 { g[1] } else { 0.0 },
+        ];
+        let t = [-normal[1], normal[0]];
+        let along = t[0] * seen[0] + t[1] * seen[1];
+        let want = [along * t[0], along * t[1]];
+        prop_assert!((got[0] - want[0]).abs() <= 1e-15 && (got[1] - want[1]).abs() <= 1e-15, "{got:?} vs {want:?}");
+        prop_assert!((got[0] * normal[0] + got[1] * normal[1]).abs() <= 1e-15);
     }
 }

@@ -492,6 +492,7 @@ proptest! {
             weighting: reference::Weighting::SolidFraction,
             magic,
             lambda_consistent: false,
+            lambda_terms: (0.0, 0.0),
         };
         let (expected, _) = reference::step(&lat, &sides, &rparams, &[]);
         for n in 0..shape.nodes() {
@@ -988,8 +989,9 @@ proptest! {
             force: [0.0; 2],
             solid,
             collision: Collision::Bgk,
+            lambda: Default::default(),
         };
-        let share = SolidShare { fraction: eps, velocity: [0.01, -0.02] };
+        let share = SolidShare { fraction: eps, velocity: [0.01, -0.02], wall_gradient: Default::default() };
         let shares = vec![share; 1 + extra];
         let expected = if extra > 0 || eps.is_nan() || eps <= 0.0 {
             None

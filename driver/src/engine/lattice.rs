@@ -17,16 +17,16 @@ use lbdem_kernels::fluid::boundary::{
     radiating_density, zou_he_known_sum, Boundaries, SideCondition, SideProfiles,
 };
 use lbdem_kernels::fluid::collide::{
-    psm_velocity, Collision, OpenLinks, PsmParams, SolidOperator, SolidShare, Weighting,
-    ALL_LINKS_OPEN,
+    psm_velocity, Collision, LambdaTerms, OpenLinks, PsmParams, SolidOperator, SolidShare,
+    Weighting, ALL_LINKS_OPEN,
 };
 use lbdem_kernels::fluid::d2q9::{equilibrium, OPPOSITE, Q};
 use lbdem_kernels::fluid::lattice::{LatticeShape, Side};
 use lbdem_kernels::fluid::step::{
     classify_special_nodes, collide_covered_nodes, collide_planned_row, covered_node_value,
     fix_special_nodes, gather_node_in, gathered_moments_in, nodes_in_rows, open_links,
-    plan_covered_row, planes_mut, special_node_value, CoveredNodes, Domain, FluidParams, FLUID,
-    PLAN_GROUPS, SOLID,
+    plan_covered_row, planes_mut, special_node_value, wall_gradients, CoveredNodes, Domain,
+    FluidParams, FLUID, PLAN_GROUPS, SOLID,
 };
 use lbdem_kernels::math::{Point, Vector};
 use lbdem_kernels::Real;
@@ -86,6 +86,8 @@ pub struct FluidLattice<T: Real> {
     /// re-maps the bodies' cells (0: at every call). See [`FluidLattice::set_remap_tolerance`].
     remap_tolerance: f64,
     solid_operator: SolidOperator,
+    /// ΩΛ's constants: friction κ and wall-pressure α ([`LambdaTerms`]).
+    lambda_terms: LambdaTerms,
     /// The fluid collision (BGK unless [`FluidLattice::set_collision`] chose TRT).
     collision: Collision<T>,
     /// Velocity profiles of [`SideCondition::VelocityProfile`] sides (west, east, south, north; empty for other
@@ -204,6 +206,7 @@ impl<T: Real> BandOut<'_, T> {
         self.shares[slot] = SolidShare {
             fraction: T::lit(frac),
             velocity: [T::lit(v[0]), T::lit(v[1])],
+            wall_gradient: [T::zero(); 2],
         };
         self.owners[slot] = owner;
         self.share_nodes[slot] = p;
@@ -916,6 +919,10 @@ type CoveredBand<'a, T> = (usize, usize, &'a mut [[T; 2]]);
 /// Nodes covered by solids (compressed rows), the solid each share belongs to, and the momentum handed to
 /// each share at the last step.
 #[derive(Clone, serde::Serialize, serde::Deserialize)]
+#[serde(bound(
+    serialize = "T: serde::Serialize",
+    deserialize = "T: serde::Deserialize<'de> + Default"
+))]
 struct Coverage<T> {
     /// Identity of the lists (nodes, offsets, owners, share nodes) for caches keyed on them
     /// ([`next_list_id`]; renewed whenever they are built, 0 until then for a coverage read from a checkpoint).
@@ -930,6 +937,9 @@ struct Coverage<T> {
     shares: Vec<SolidShare<T>>,
     owners: Vec<u32>,
     share_nodes: Vec<[f64; 2]>,
+    /// The unit outward normal of each share's solid at its node ([`surface_normal`]; zero for a solid given
+    /// cell by cell): the wall direction of ΩΛ's wall-pressure force ([`wall_gradients`]).
+    normals: Vec<[T; 2]>,
     exchange: Vec<[T; 2]>,
     weighting: Weighting,
     /// Links of each covered node to nodes that are not fully covered (read by ΩΛ only). Derived from the
@@ -1053,6 +1063,7 @@ impl<T: Real> FluidLattice<T> {
             cover_scratch: CoverScratch::default(),
             remap_tolerance: 0.0,
             solid_operator: SolidOperator::default(),
+            lambda_terms: LambdaTerms::default(),
             collision: Collision::Bgk,
             profiles: [Side::West, Side::East, Side::South, Side::North].map(|side| {
                 match (bc.side(side), side) {
@@ -1405,6 +1416,7 @@ impl<T: Real> FluidLattice<T> {
             ),
         };
         let total = cov.shares.len();
+        Self::write_normals(&mut cov, bodies);
         // Zeroed in parallel (2 MB in the full-size fracture test: serial, it was 1 % of the two-thread step).
         cov.exchange.resize(total, [T::zero(); 2]);
         cov.exchange
@@ -1431,6 +1443,24 @@ impl<T: Real> FluidLattice<T> {
             );
         }
         self.coverage = Some(cov);
+    }
+
+    /// Each share's wall direction: the outward normal of its body at its node ([`surface_normal`]), in
+    /// parallel over chunks of shares, each body's orientation taken once.
+    fn write_normals(cov: &mut Coverage<T>, bodies: &[CoupledBody<f64>]) {
+        const CHUNK: usize = 4096;
+        let prepared: Vec<PreparedBody<f64>> = bodies.par_iter().map(PreparedBody::new).collect();
+        cov.normals.resize(cov.shares.len(), [T::zero(); 2]);
+        cov.normals
+            .par_chunks_mut(CHUNK)
+            .zip(cov.owners.par_chunks(CHUNK))
+            .zip(cov.share_nodes.par_chunks(CHUNK))
+            .for_each(|((normals, owners), nodes)| {
+                for ((n, &owner), &p) in normals.iter_mut().zip(owners).zip(nodes) {
+                    let v = prepared[owner as usize].surface_normal(Point::from(p));
+                    *n = [T::lit(v[0]), T::lit(v[1])];
+                }
+            });
     }
 
     /// Steps 2–4 of [`FluidLattice::cover_with_bodies`] from the bodies' cells: the coverage's lists built anew
@@ -1503,6 +1533,7 @@ impl<T: Real> FluidLattice<T> {
             shares: Vec::new(),
             owners: Vec::new(),
             share_nodes: Vec::new(),
+            normals: Vec::new(),
             exchange: Vec::new(),
             weighting,
             links: Vec::new(),
@@ -1512,10 +1543,7 @@ impl<T: Real> FluidLattice<T> {
         cov.fractions = next_list_id();
         scratch.src.resize(total, 0);
         // Every entry below is overwritten by its band.
-        let zero = SolidShare {
-            fraction: T::zero(),
-            velocity: [T::zero(); 2],
-        };
+        let zero = SolidShare::default();
         cov.nodes.resize(total_nodes, 0);
         cov.offsets.resize(total_nodes + 1, 0);
         cov.shares.resize(total, zero);
@@ -1644,6 +1672,7 @@ impl<T: Real> FluidLattice<T> {
                     *share = SolidShare {
                         fraction: T::lit(frac),
                         velocity: [T::lit(v[0]), T::lit(v[1])],
+                        wall_gradient: [T::zero(); 2],
                     };
                 }
             });
@@ -1670,6 +1699,7 @@ impl<T: Real> FluidLattice<T> {
             shares: Vec::new(),
             owners: Vec::new(),
             share_nodes: Vec::new(),
+            normals: Vec::new(),
             exchange: Vec::new(),
             weighting,
             links: Vec::new(),
@@ -1701,10 +1731,13 @@ impl<T: Real> FluidLattice<T> {
                 cov.shares.push(SolidShare {
                     fraction: T::lit(e),
                     velocity: [T::lit(v[0]), T::lit(v[1])],
+                    wall_gradient: [T::zero(); 2],
                 });
                 cov.offsets.push(cov.shares.len() as u32);
                 cov.owners.push(0);
                 cov.share_nodes.push([x as f64, y as f64]);
+                // A solid given cell by cell has no surface direction: no wall-pressure force (ΩΛ).
+                cov.normals.push([T::zero(); 2]);
             }
         }
         cov.exchange = vec![[T::zero(); 2]; cov.shares.len()];
@@ -1718,6 +1751,42 @@ impl<T: Real> FluidLattice<T> {
             self.solid_operator,
         );
         self.coverage = Some(cov);
+        Ok(())
+    }
+
+    /// Give the solid of a coverage set cell by cell ([`FluidLattice::cover_with_field`]) its wall direction:
+    /// `normal(x, y)` is the unit outward normal of the solid's surface at covered node (x, y), or zero where it
+    /// has none. ΩΛ's wall-pressure force ([`wall_gradients`]) acts along the surface, so a solid without a
+    /// direction gets none (bodies get theirs from their shape in [`FluidLattice::cover_with_bodies`]).
+    /// Refused, with the lattice unchanged, without a coverage, or for a normal that is not finite or neither
+    /// of unit length (to 1e-9) nor zero, naming the node.
+    pub fn set_field_normals(&mut self, normal: impl Fn(usize, usize) -> [f64; 2]) -> Result<()> {
+        let s = self.shape;
+        let Some(cov) = self.coverage.as_mut() else {
+            return Err(LbdemError::field(
+                "solid normals",
+                "no coverage",
+                "need a solid covering the lattice",
+                "call cover_with_field first",
+            ));
+        };
+        let mut normals = Vec::with_capacity(cov.shares.len());
+        for (k, &node) in cov.nodes.iter().enumerate() {
+            let (x, y) = s.coords(node as usize);
+            let n = normal(x, y);
+            let len = n[0].hypot(n[1]);
+            if !(len.is_finite() && (len == 0.0 || (len - 1.0).abs() <= 1e-9)) {
+                return Err(LbdemError::field(
+                    "solid normal",
+                    format!("{n:?} at node ({x}, {y})"),
+                    "must be finite and of unit length, or zero for no direction",
+                    "normalise the surface normal",
+                ));
+            }
+            let count = (cov.offsets[k + 1] - cov.offsets[k]) as usize;
+            normals.extend(std::iter::repeat_n([T::lit(n[0]), T::lit(n[1])], count));
+        }
+        cov.normals = normals;
         Ok(())
     }
 
@@ -1940,6 +2009,31 @@ impl<T: Real> FluidLattice<T> {
         self.refresh_links();
     }
 
+    /// Set ΩΛ's constants ([`LambdaTerms::FRICTION_ONLY`], the default, or [`LambdaTerms::WALL_PRESSURE`]).
+    /// Refused for a friction or wall-pressure constant that is negative or not finite.
+    pub fn set_lambda_terms(&mut self, terms: LambdaTerms) -> Result<()> {
+        for (field, v) in [
+            ("lambda friction", terms.friction),
+            ("lambda wall pressure", terms.pressure),
+        ] {
+            if !(v.is_finite() && v >= 0.0) {
+                return Err(LbdemError::field(
+                    field,
+                    v,
+                    "must be finite and not negative",
+                    "use LambdaTerms::FRICTION_ONLY or LambdaTerms::WALL_PRESSURE",
+                ));
+            }
+        }
+        self.lambda_terms = terms;
+        Ok(())
+    }
+
+    /// ΩΛ's constants.
+    pub fn lambda_terms(&self) -> LambdaTerms {
+        self.lambda_terms
+    }
+
     /// The solid collision operator of covered nodes.
     pub fn solid_operator(&self) -> SolidOperator {
         self.solid_operator
@@ -2033,11 +2127,58 @@ impl<T: Real> FluidLattice<T> {
 
     /// Advance one lattice step, in parallel over row bands on the current rayon pool.
     pub fn step(&mut self) {
+        self.update_wall_gradients();
         match self.streaming {
             Streaming::Aa => self.step_in_place(),
             Streaming::TwoLattice => self.step_two_lattice(),
         }
         self.steps += 1;
+    }
+
+    /// ΩΛ's wall gradients of the covered nodes ([`wall_gradients`]) from the populations the step about to run
+    /// gathers, in parallel over chunks of covered nodes (each node reads only the buffer, so the values do not
+    /// depend on the chunks or the thread count). Nothing for the other operators, which do not read them.
+    fn update_wall_gradients(&mut self) {
+        const CHUNK: usize = 1024;
+        if self.solid_operator != SolidOperator::LambdaConsistent
+            || self.lambda_terms.pressure == 0.0
+        {
+            return;
+        }
+        let range = self.current_range();
+        let Some(cov) = self.coverage.as_mut() else {
+            return;
+        };
+        let domain = Domain {
+            shape: self.shape,
+            bc: self.bc,
+            profiles: side_profiles(&self.profiles),
+            flags: &self.flags,
+        };
+        let (src, layout) = (&self.buffers[range], self.layout);
+        let (nodes, offsets, links, normals) = (&cov.nodes, &cov.offsets, &cov.links, &cov.normals);
+        let mut work = Vec::with_capacity(nodes.len().div_ceil(CHUNK));
+        let mut rest = &mut cov.shares[..];
+        for k0 in (0..nodes.len()).step_by(CHUNK) {
+            let k1 = (k0 + CHUNK).min(nodes.len());
+            let len = (offsets[k1] - offsets[k0]) as usize;
+            let (mine, more) = std::mem::take(&mut rest).split_at_mut(len);
+            rest = more;
+            work.push((k0, k1, mine));
+        }
+        work.into_par_iter().for_each(|(k0, k1, shares)| {
+            let (a, b) = (offsets[k0] as usize, offsets[k1] as usize);
+            wall_gradients(
+                &domain,
+                src,
+                layout,
+                &nodes[k0..k1],
+                &offsets[k0..=k1],
+                &links[k0..k1],
+                &normals[a..b],
+                shares,
+            );
+        });
     }
 
     /// One step of the in-place (AA) scheme, in three phases:
@@ -2095,6 +2236,7 @@ impl<T: Real> FluidLattice<T> {
             force: params.force,
             solid: self.solid_operator,
             collision: self.collision,
+            lambda: self.lambda_terms,
         });
         type Lists<'a, T> = (
             &'a [u32],
@@ -2425,6 +2567,7 @@ impl<T: Real> FluidLattice<T> {
             force: params.force,
             solid: self.solid_operator,
             collision: self.collision,
+            lambda: self.lambda_terms,
         });
         work.into_par_iter()
             .for_each(|(y0, mut band, (lo, hi), exchange)| {
@@ -2481,6 +2624,7 @@ impl<T: Real> FluidLattice<T> {
                 force: self.params.force,
                 solid: self.solid_operator,
                 collision: self.collision,
+                lambda: self.lambda_terms,
             };
             for (k, &node) in c.nodes.iter().enumerate() {
                 let node = node as usize;

@@ -63,7 +63,7 @@ pub const MAGIC: [u8; 8] = *b"LBDEMCKP";
 /// version-5 files are refused with the version named. Version 7: the terzaghi kind's sealed column and dry
 /// recovery (issue 14) and the fracture kind's count of grains outside the lattice change those payloads;
 /// version-6 files are refused with the version named.
-pub const FORMAT_VERSION: u32 = 7;
+pub const FORMAT_VERSION: u32 = 8;
 /// SHA-256 of a scene text (stored in the header, checked on resume).
 pub fn scene_hash(text: &str) -> [u8; 32] {
     Sha256::digest(text.as_bytes()).into()

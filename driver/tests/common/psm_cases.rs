@@ -14,7 +14,7 @@
 #![allow(dead_code)]
 use lbdem::engine::lattice::{FluidDisc, FluidLattice};
 use lbdem_kernels::fluid::boundary::Boundaries;
-use lbdem_kernels::fluid::collide::{Collision, SolidOperator, Trt, Weighting};
+use lbdem_kernels::fluid::collide::{Collision, LambdaTerms, SolidOperator, Trt, Weighting};
 use lbdem_kernels::fluid::step::FluidParams;
 use lbdem_reference::analytic::sangani_acrivos_drag;
 use rand::{RngExt, SeedableRng};
@@ -71,6 +71,8 @@ pub struct Method {
     pub solid: SolidOperator,
     /// Weighting B.
     pub weighting: Weighting,
+    /// ΩΛ's constants (read under ΩΛ only).
+    pub lambda: LambdaTerms,
 }
 
 impl Method {
@@ -79,6 +81,12 @@ impl Method {
         fluid: Fluid::Trt(3.0 / 16.0),
         solid: SolidOperator::LambdaConsistent,
         weighting: Weighting::SolidFraction,
+        lambda: LambdaTerms::FRICTION_ONLY,
+    };
+    /// [`Method::LAMBDA`] in ΩΛ's wall-pressure form ([`LambdaTerms::WALL_PRESSURE`]).
+    pub const LAMBDA_WALL: Method = Method {
+        lambda: LambdaTerms::WALL_PRESSURE,
+        ..Method::LAMBDA
     };
 }
 
@@ -177,6 +185,7 @@ pub fn square_array_at(
     let mut lattice = FluidLattice::new(cell, cell, Boundaries::periodic(), params).unwrap();
     lattice.set_collision(method.fluid.collision()).unwrap();
     lattice.set_solid_operator(method.solid);
+    lattice.set_lambda_terms(method.lambda).unwrap();
     lattice.set_band_rows(cell.div_ceil(2));
     let mid = 0.5 * (cell as f64 - 1.0);
     lattice.cover_with_discs(
@@ -304,6 +313,7 @@ pub fn pack_permeability(
     let mut lattice = FluidLattice::new(size, size, Boundaries::periodic(), params).unwrap();
     lattice.set_collision(method.fluid.collision()).unwrap();
     lattice.set_solid_operator(method.solid);
+    lattice.set_lambda_terms(method.lambda).unwrap();
     lattice.cover_with_discs(&with_periodic_images(discs, size), method.weighting);
     let eps = lattice.solid_fraction_map();
     let porosity = 1.0 - eps.iter().sum::<f64>() / eps.len() as f64;

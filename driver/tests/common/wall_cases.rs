@@ -8,7 +8,7 @@
 #![allow(dead_code)]
 use lbdem::engine::lattice::FluidLattice;
 use lbdem_kernels::fluid::boundary::Boundaries;
-use lbdem_kernels::fluid::collide::{Collision, SolidOperator, Trt, Weighting};
+use lbdem_kernels::fluid::collide::{Collision, LambdaTerms, SolidOperator, Trt, Weighting};
 use lbdem_kernels::fluid::step::FluidParams;
 
 /// Rows of the channel cases.
@@ -17,7 +17,9 @@ pub const NY: usize = 40;
 pub const G: f64 = 1e-7;
 
 /// A periodic lattice under TRT (Λ = 3/16) + ΩΛ with body force `force`, covered by `eps` (row-major) with
-/// solid velocities `vel`.
+/// solid velocities `vel` and wall directions `normal` (a unit normal of the solid's surface at a node; its sign
+/// does not matter to ΩΛ, which uses the surface's tangent), with ΩΛ's constants `terms`.
+#[allow(clippy::too_many_arguments)]
 pub fn lattice(
     nx: usize,
     ny: usize,
@@ -25,14 +27,18 @@ pub fn lattice(
     force: [f64; 2],
     eps: &[f64],
     vel: impl Fn(usize, usize) -> [f64; 2],
+    normal: impl Fn(usize, usize) -> [f64; 2],
+    terms: LambdaTerms,
 ) -> FluidLattice<f64> {
     let params = FluidParams { tau, force };
     let mut l = FluidLattice::new(nx, ny, Boundaries::periodic(), params).expect("valid lattice");
     l.set_collision(Collision::Trt(Trt::new(3.0 / 16.0).expect("positive Λ")))
         .expect("valid rates");
     l.set_solid_operator(SolidOperator::LambdaConsistent);
+    l.set_lambda_terms(terms).expect("valid constants");
     l.cover_with_field(|x, y| eps[y * nx + x], vel, Weighting::SolidFraction)
         .expect("fractions in [0, 1]");
+    l.set_field_normals(normal).expect("unit normals");
     l
 }
 
@@ -57,8 +63,17 @@ pub fn steady(
 }
 
 /// Flux per unit depth along x, Σ (1 − ε) u_x / nx, of the channel with slab faces at `yb` (solid below) and
-/// `yt` (solid above) over columns 0 … `ln` − 1 and exact walls at 2.5 and NY − 3.5 elsewhere.
-pub fn channel_flux(yb: f64, yt: f64, ln: usize, lx: usize, tau: f64, tol: f64) -> f64 {
+/// `yt` (solid above) over columns 0 … `ln` − 1 and exact walls at 2.5 and NY − 3.5 elsewhere, under ΩΛ with
+/// `terms`.
+pub fn channel_flux(
+    yb: f64,
+    yt: f64,
+    ln: usize,
+    lx: usize,
+    tau: f64,
+    tol: f64,
+    terms: LambdaTerms,
+) -> f64 {
     let eps: Vec<f64> = (0..lx * NY)
         .map(|i| {
             let (x, y) = (i % lx, (i / lx) as f64);
@@ -70,7 +85,17 @@ pub fn channel_flux(yb: f64, yt: f64, ln: usize, lx: usize, tau: f64, tol: f64) 
             ((b - (y - 0.5)).clamp(0.0, 1.0) + ((y + 0.5) - t).clamp(0.0, 1.0)).min(1.0)
         })
         .collect();
-    let mut l = lattice(lx, NY, tau, [G, 0.0], &eps, |_, _| [0.0; 2]);
+    // The slabs' faces are planes y = const.
+    let mut l = lattice(
+        lx,
+        NY,
+        tau,
+        [G, 0.0],
+        &eps,
+        |_, _| [0.0; 2],
+        |_, _| [0.0, 1.0],
+        terms,
+    );
     steady(&mut l, tol, |l| {
         let (_, u) = l.moments();
         u.iter()
@@ -83,13 +108,24 @@ pub fn channel_flux(yb: f64, yt: f64, ln: usize, lx: usize, tau: f64, tol: f64) 
 
 /// Offset per wall of the channel with faces `yb`, `yt` (see [`channel_flux`]) against exact-wall runs, in
 /// lattice spacings, + when the solid acts thicker; every run steady to `tol` (relative flux change per 500 steps).
-pub fn channel_offset(yb: f64, yt: f64, ln: usize, lx: usize, tau: f64, tol: f64) -> f64 {
+pub fn channel_offset(
+    yb: f64,
+    yt: f64,
+    ln: usize,
+    lx: usize,
+    tau: f64,
+    tol: f64,
+    terms: LambdaTerms,
+) -> f64 {
     let h = yt - yb;
     let h0 = (h - 1.5).round();
     let refs: Vec<(f64, f64)> = (0..4)
         .map(|k| {
             let w = h0 + k as f64;
-            (w, channel_flux(14.5, 14.5 + w, ln, lx, tau, tol).ln())
+            (
+                w,
+                channel_flux(14.5, 14.5 + w, ln, lx, tau, tol, terms).ln(),
+            )
         })
         .collect();
     let lagrange = |x: f64| {
@@ -103,7 +139,7 @@ pub fn channel_offset(yb: f64, yt: f64, ln: usize, lx: usize, tau: f64, tol: f64
             })
             .sum::<f64>()
     };
-    let target = channel_flux(yb, yt, ln, lx, tau, tol).ln();
+    let target = channel_flux(yb, yt, ln, lx, tau, tol, terms).ln();
     // A flux that is not positive has no width: ln gives NaN, which the bisection would hide.
     assert!(
         target.is_finite() && refs.iter().all(|r| r.1.is_finite()),

@@ -1148,3 +1148,72 @@ pub fn open_links<T: Real>(
     }
     open
 }
+
+/// ΩΛ's wall gradients ([`SolidShare::wall_gradient`]) of the covered nodes `nodes` (node k has the shares
+/// `shares[offsets[k] − offsets[0] .. offsets[k + 1] − offsets[0]]`, the open links `links[k]`, and each
+/// share s the unit normal `normals[s − offsets[0]]` of its solid's surface), from the populations `src` in
+/// `layout` as the step about to run will gather them: at a partly covered node (0 < Σε <
+/// 1 − [`super::collide::LAMBDA_FULL_GAP`], not an obstacle) each share gets
+/// [`super::collide::wall_gradient`] of the node's density and of the densities of its axis neighbours whose
+/// links are open (not fully covered, not obstacles, not beyond a wall); every other share gets zero. Reads
+/// only `src`, so any split of the nodes gives the same values.
+#[allow(clippy::too_many_arguments)]
+pub fn wall_gradients<T: Real>(
+    domain: &Domain<'_, T>,
+    src: &[T],
+    layout: Layout,
+    nodes: &[u32],
+    offsets: &[u32],
+    links: &[OpenLinks],
+    normals: &[[T; 2]],
+    shares: &mut [SolidShare<T>],
+) {
+    let (shape, bc, flags) = (&domain.shape, &domain.bc, domain.flags);
+    let periodic = bc.periodic_axes();
+    let first = offsets.first().copied().unwrap_or(0) as usize;
+    let rho_at = |n: usize| {
+        let (x, y) = shape.coords(n);
+        density(&gather_node_in(
+            shape,
+            src,
+            layout,
+            bc,
+            &domain.profiles,
+            flags,
+            x,
+            y,
+        ))
+    };
+    for (k, &node) in nodes.iter().enumerate() {
+        let (a, b) = (offsets[k] as usize - first, offsets[k + 1] as usize - first);
+        let n = node as usize;
+        let mut eps_sum = T::zero();
+        for s in &shares[a..b] {
+            eps_sum += s.fraction;
+        }
+        let partial = flags[n] != SOLID
+            && eps_sum > T::zero()
+            && !super::collide::lambda_fully_covered(eps_sum);
+        if !partial {
+            for s in &mut shares[a..b] {
+                s.wall_gradient = [T::zero(); 2];
+            }
+            continue;
+        }
+        let (x, y) = shape.coords(n);
+        let rho = rho_at(n);
+        let neighbours: [Option<T>; 4] = core::array::from_fn(|i| {
+            let q = i + 1;
+            if links[k] & (1 << q) == 0 {
+                return None;
+            }
+            match shape.neighbour(x, y, q, periodic) {
+                Neighbour::Node(j) => Some(rho_at(j)),
+                _ => None,
+            }
+        });
+        for (s, normal) in shares[a..b].iter_mut().zip(&normals[a..b]) {
+            s.wall_gradient = super::collide::wall_gradient(rho, neighbours, *normal);
+        }
+    }
+}

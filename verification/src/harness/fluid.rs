@@ -450,6 +450,7 @@ pub fn fix_passes_in_bounds(c: &mut dyn Chooser, max: usize) {
         SolidShare {
             fraction: 0.5,
             velocity: [0.0, 0.01],
+            wall_gradient: Default::default(),
         };
         shape.nodes()
     ];
@@ -464,6 +465,7 @@ pub fn fix_passes_in_bounds(c: &mut dyn Chooser, max: usize) {
         force: [1e-4, 0.0],
         solid: SolidOperator::NonEquilibriumBounceBack,
         collision: Collision::Bgk,
+        lambda: Default::default(),
     };
     let mut dst = vec![f64::NAN; shape.buffer_len()];
     for (y0, y1) in [(0, ym), (ym, ny)] {

@@ -1,6 +1,6 @@
 //! Checkpoints of a [`FluidLattice`] (serde): shape, side conditions, collision parameters, node flags, the
 //! current populations (every plane in full, padding included), the step counter, the PSM coverage (covered
-//! nodes, shares, owners, the momentum exchanged at the last step, the weighting), the solid operator and the
+//! nodes, shares, owners, wall normals, the momentum exchanged at the last step, the weighting), the solid operator, ΩΛ's constants and the
 //! fluid collision (BGK, or TRT with its magic parameter, checked again on load) and the velocity profiles of
 //! profile sides (checked again on load), the remap tolerance and, with one, the geometry each body's cells were
 //! last mapped for (so that a resumed run keeps the same cells until the bodies move beyond the tolerance, as
@@ -13,7 +13,7 @@
 use std::borrow::Cow;
 
 use lbdem_kernels::fluid::boundary::Boundaries;
-use lbdem_kernels::fluid::collide::{Collision, SolidOperator};
+use lbdem_kernels::fluid::collide::{Collision, LambdaTerms, SolidOperator};
 use lbdem_kernels::fluid::step::FluidParams;
 use lbdem_kernels::Real;
 use serde::de::Error as _;
@@ -35,6 +35,8 @@ struct Record<'a, T: Real> {
     populations: Cow<'a, [T]>,
     steps: u64,
     solid_operator: SolidOperator,
+    /// ΩΛ's friction κ and wall-pressure α (checked again on load).
+    lambda_terms: LambdaTerms,
     collision: Collision<T>,
     coverage: Option<Cow<'a, Coverage<T>>>,
     profiles: Cow<'a, [Vec<[T; 2]>; 4]>,
@@ -87,6 +89,7 @@ impl<T: Real + Serialize> Serialize for FluidLattice<T> {
             populations: self.populations(),
             steps: self.steps,
             solid_operator: self.solid_operator,
+            lambda_terms: self.lambda_terms,
             collision: self.collision,
             coverage: self.coverage.as_ref().map(Cow::Borrowed),
             profiles: Cow::Borrowed(&self.profiles),
@@ -122,6 +125,9 @@ impl<'de, T: Real + Deserialize<'de>> Deserialize<'de> for FluidLattice<T> {
         lattice.steps = r.steps;
         lattice.solid_operator = r.solid_operator;
         lattice
+            .set_lambda_terms(r.lambda_terms)
+            .map_err(D::Error::custom)?;
+        lattice
             .set_collision(r.collision)
             .map_err(|e| D::Error::custom(e.to_string()))?;
         if let Some(c) = r.coverage {
@@ -137,6 +143,10 @@ impl<'de, T: Real + Deserialize<'de>> Deserialize<'de> for FluidLattice<T> {
                 && c.nodes.windows(2).all(|w| w[0] < w[1])
                 && c.owners.len() == n
                 && c.share_nodes.len() == n
+                && c.normals.len() == n
+                && c.normals
+                    .iter()
+                    .all(|v| v[0].is_finite() && v[1].is_finite())
                 && c.exchange.len() == n;
             if !consistent {
                 return Err(D::Error::custom(
