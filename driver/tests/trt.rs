@@ -5,7 +5,7 @@ use lbdem::engine::exec::SimdLevel;
 use lbdem::engine::lattice::{FluidDisc, FluidLattice, Streaming};
 use lbdem::run::checkpoint::Checkpoint;
 use lbdem_kernels::fluid::boundary::{Boundaries, SideCondition};
-use lbdem_kernels::fluid::collide::{Collision, SolidOperator, Trt, Weighting};
+use lbdem_kernels::fluid::collide::{Collision, LambdaTerms, SolidOperator, Trt, Weighting};
 use lbdem_kernels::fluid::step::FluidParams;
 use lbdem_kernels::Real;
 
@@ -172,6 +172,27 @@ fn trt_is_bitwise_identical_across_simd_levels_streaming_schemes_and_threads() {
         17,
         "f32 periodic, ΩΛ",
     );
+    // ΩΛ's wall-pressure form: the gradient pass before each step reads the buffer in either streaming layout.
+    assert_all_agree(
+        || {
+            let mut l = busy::<f64>(channel(), [2e-6, -1e-6], 3.0 / 16.0);
+            l.set_solid_operator(SolidOperator::LambdaConsistent);
+            l.set_lambda_terms(LambdaTerms::WALL_PRESSURE).unwrap();
+            l
+        },
+        17,
+        "f64 channel, ΩΛ wall-pressure form",
+    );
+    assert_all_agree(
+        || {
+            let mut l = busy::<f32>(Boundaries::periodic(), [1e-6, 0.0], 0.1);
+            l.set_solid_operator(SolidOperator::LambdaConsistent);
+            l.set_lambda_terms(LambdaTerms::WALL_PRESSURE).unwrap();
+            l
+        },
+        17,
+        "f32 periodic, ΩΛ wall-pressure form",
+    );
 }
 
 #[test]
@@ -214,6 +235,94 @@ fn a_checkpoint_keeps_the_collision_operator() {
         b.step();
     }
     assert_eq!(state(&a), state(&b));
+}
+
+#[test]
+fn a_checkpoint_keeps_the_wall_pressure_form_and_resumes_bitwise() {
+    // The wall gradients are not saved (each step derives them from the populations it gathers); the normals
+    // and ΩΛ's constants are: the resumed run is the uninterrupted one, bit for bit, and differs from the
+    // friction-only run (so the form is on after loading).
+    let make = |terms: LambdaTerms| {
+        let mut l = busy::<f64>(channel(), [1e-6, 0.0], 3.0 / 16.0);
+        l.set_solid_operator(SolidOperator::LambdaConsistent);
+        l.set_lambda_terms(terms).unwrap();
+        l
+    };
+    let mut a = make(LambdaTerms::WALL_PRESSURE);
+    for _ in 0..7 {
+        a.step();
+    }
+    let bytes = Checkpoint::to_bytes("scene", "fluid", 7, &a);
+    let (_, mut b): (_, FluidLattice<f64>) =
+        Checkpoint::from_bytes(&bytes, "scene", "fluid").unwrap();
+    assert_eq!(b.lambda_terms(), LambdaTerms::WALL_PRESSURE);
+    let mut c = make(LambdaTerms::FRICTION_ONLY);
+    for _ in 0..7 {
+        c.step();
+    }
+    for _ in 0..9 {
+        a.step();
+        b.step();
+        c.step();
+    }
+    assert_eq!(state(&a), state(&b));
+    assert_ne!(state(&a), state(&c));
+}
+
+#[test]
+fn bad_wall_pressure_settings_are_refused_naming_the_field() {
+    let mut l = busy::<f64>(channel(), [0.0, 0.0], 3.0 / 16.0);
+    for bad in [f64::NAN, -1.0, f64::INFINITY] {
+        let err = l
+            .set_lambda_terms(LambdaTerms {
+                friction: 0.45,
+                pressure: bad,
+            })
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("lambda wall pressure"), "{err}");
+        let err = l
+            .set_lambda_terms(LambdaTerms {
+                friction: bad,
+                pressure: 2.0,
+            })
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("lambda friction"), "{err}");
+    }
+    // The lattice keeps its constants.
+    assert_eq!(l.lambda_terms(), LambdaTerms::FRICTION_ONLY);
+    // Normals for a solid given cell by cell: unit or zero, finite; the node is named.
+    let mut f = FluidLattice::<f64>::new(
+        8,
+        8,
+        Boundaries::periodic(),
+        FluidParams {
+            tau: 0.8,
+            force: [0.0; 2],
+        },
+    )
+    .unwrap();
+    let none = f
+        .set_field_normals(|_, _| [0.0, 1.0])
+        .unwrap_err()
+        .to_string();
+    assert!(none.contains("no coverage"), "{none}");
+    f.cover_with_field(
+        |_, y| if y == 2 { 0.5 } else { 0.0 },
+        |_, _| [0.0; 2],
+        Weighting::SolidFraction,
+    )
+    .unwrap();
+    for bad in [[0.5, 0.0], [f64::NAN, 1.0], [1.0, 1.0]] {
+        let err = f.set_field_normals(|_, _| bad).unwrap_err().to_string();
+        assert!(
+            err.contains("solid normal") && err.contains("at node (0, 2)"),
+            "{err}"
+        );
+    }
+    f.set_field_normals(|_, _| [0.0, 1.0]).unwrap();
+    f.set_field_normals(|_, _| [0.0; 2]).unwrap();
 }
 
 #[test]

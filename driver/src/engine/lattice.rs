@@ -1446,19 +1446,28 @@ impl<T: Real> FluidLattice<T> {
     }
 
     /// Each share's wall direction: the outward normal of its body at its node ([`surface_normal`]), in
-    /// parallel over chunks of shares, each body's orientation taken once.
+    /// parallel over chunks of shares, each body's orientation taken once. A share that covers its node fully
+    /// by itself (ΩΛ then treats the node as fully covered, where no wall force acts) gets zero, which saves
+    /// most of the work in a dense pack.
     fn write_normals(cov: &mut Coverage<T>, bodies: &[CoupledBody<f64>]) {
         const CHUNK: usize = 4096;
         let prepared: Vec<PreparedBody<f64>> = bodies.par_iter().map(PreparedBody::new).collect();
         cov.normals.resize(cov.shares.len(), [T::zero(); 2]);
         cov.normals
             .par_chunks_mut(CHUNK)
+            .zip(cov.shares.par_chunks(CHUNK))
             .zip(cov.owners.par_chunks(CHUNK))
             .zip(cov.share_nodes.par_chunks(CHUNK))
-            .for_each(|((normals, owners), nodes)| {
-                for ((n, &owner), &p) in normals.iter_mut().zip(owners).zip(nodes) {
-                    let v = prepared[owner as usize].surface_normal(Point::from(p));
-                    *n = [T::lit(v[0]), T::lit(v[1])];
+            .for_each(|(((normals, shares), owners), nodes)| {
+                for (((n, share), &owner), &p) in
+                    normals.iter_mut().zip(shares).zip(owners).zip(nodes)
+                {
+                    *n = if lbdem_kernels::fluid::collide::lambda_fully_covered(share.fraction) {
+                        [T::zero(); 2]
+                    } else {
+                        let v = prepared[owner as usize].surface_normal(Point::from(p));
+                        [T::lit(v[0]), T::lit(v[1])]
+                    };
                 }
             });
     }

@@ -62,7 +62,9 @@ pub const MAGIC: [u8; 8] = *b"LBDEMCKP";
 /// remap tolerance and the grain geometry its coverage was mapped for (issue 13, `fluid.remap_tolerance`);
 /// version-5 files are refused with the version named. Version 7: the terzaghi kind's sealed column and dry
 /// recovery (issue 14) and the fracture kind's count of grains outside the lattice change those payloads;
-/// version-6 files are refused with the version named.
+/// version-6 files are refused with the version named. Version 8: the lattice's coverage keeps each share's wall
+/// normal and the lattice ΩΛ's constants (issue 11, ΩΛ's wall-pressure form); version-7 files are refused with
+/// the version named.
 pub const FORMAT_VERSION: u32 = 8;
 /// SHA-256 of a scene text (stored in the header, checked on resume).
 pub fn scene_hash(text: &str) -> [u8; 32] {
