@@ -134,6 +134,9 @@ struct CoveredPlan {
 /// counters that are all zero between calls.
 #[derive(Default)]
 struct CoverScratch {
+    /// The bodies of the last [`FluidLattice::cover_with_bodies`] call: what the shares' wall normals are computed
+    /// from when ΩΛ's wall-pressure form is switched on after the coverage was made.
+    last_bodies: Vec<CoupledBody<f64>>,
     bodies: Vec<BodyCells>,
     /// One kernel scratch per chunk of [`BODY_CHUNK`] bodies.
     grids: Vec<GridScratch>,
@@ -938,7 +941,8 @@ struct Coverage<T> {
     owners: Vec<u32>,
     share_nodes: Vec<[f64; 2]>,
     /// The unit outward normal of each share's solid at its node ([`surface_normal`]; zero for a solid given
-    /// cell by cell): the wall direction of ΩΛ's wall-pressure force ([`wall_gradients`]).
+    /// cell by cell unless [`FluidLattice::set_field_normals`] gave them): the wall direction of ΩΛ's
+    /// wall-pressure force ([`wall_gradients`]). Empty for bodies while that form is off (nothing reads them).
     normals: Vec<[T; 2]>,
     exchange: Vec<[T; 2]>,
     weighting: Weighting,
@@ -1340,6 +1344,7 @@ impl<T: Real> FluidLattice<T> {
         //    since the last call keeps its cell fractions. The rigid velocities are evaluated in step 4.
         let simd = self.simd;
         let tolerance = self.remap_tolerance;
+        let wall_form = self.wall_form_active();
         let scratch = &mut self.cover_scratch;
         // With a remap tolerance, every body keeps the cells it was last mapped with while no point of any
         // body has moved farther than the tolerance from where it was then (one decision for all bodies, so
@@ -1416,7 +1421,15 @@ impl<T: Real> FluidLattice<T> {
             ),
         };
         let total = cov.shares.len();
-        Self::write_normals(&mut cov, bodies);
+        // The wall normals only where something reads them (computing them for every re-mapping cost 13–18 % of
+        // `cover_remap` under ΩΛ with the form off).
+        if wall_form {
+            Self::write_normals(&mut cov, bodies);
+        } else {
+            cov.normals.clear();
+        }
+        scratch.last_bodies.clear();
+        scratch.last_bodies.extend_from_slice(bodies);
         // Zeroed in parallel (2 MB in the full-size fracture test: serial, it was 1 % of the two-thread step).
         cov.exchange.resize(total, [T::zero(); 2]);
         cov.exchange
@@ -2016,10 +2029,14 @@ impl<T: Real> FluidLattice<T> {
         self.solid_operator = op;
         // ΩΛ's open-link masks are only computed while ΩΛ is the operator.
         self.refresh_links();
+        self.refresh_normals();
     }
 
     /// Set ΩΛ's constants ([`LambdaTerms::FRICTION_ONLY`], the default, or [`LambdaTerms::WALL_PRESSURE`]).
-    /// Refused for a friction or wall-pressure constant that is negative or not finite.
+    /// Refused for a friction or wall-pressure constant that is negative or not finite. Switching the
+    /// wall-pressure form on computes the wall normals of a coverage made by [`FluidLattice::cover_with_bodies`]
+    /// from that call's bodies; a body coverage read from a checkpoint saved with the form off has none until
+    /// the next `cover_with_bodies` call, and gets no wall force until then.
     pub fn set_lambda_terms(&mut self, terms: LambdaTerms) -> Result<()> {
         for (field, v) in [
             ("lambda friction", terms.friction),
@@ -2035,12 +2052,33 @@ impl<T: Real> FluidLattice<T> {
             }
         }
         self.lambda_terms = terms;
+        self.refresh_normals();
         Ok(())
     }
 
     /// ΩΛ's constants.
     pub fn lambda_terms(&self) -> LambdaTerms {
         self.lambda_terms
+    }
+
+    /// Whether ΩΛ's wall-pressure form is on (ΩΛ the operator, α ≠ 0): the only reader of the wall normals.
+    fn wall_form_active(&self) -> bool {
+        self.solid_operator == SolidOperator::LambdaConsistent && self.lambda_terms.pressure != 0.0
+    }
+
+    /// The wall normals of a coverage made by [`FluidLattice::cover_with_bodies`] while the wall-pressure form
+    /// was off, computed from that call's bodies once the form is on.
+    fn refresh_normals(&mut self) {
+        if !self.wall_form_active() {
+            return;
+        }
+        let bodies = &self.cover_scratch.last_bodies;
+        if let Some(cov) = self.coverage.as_mut() {
+            let owned = cov.owners.iter().all(|&o| (o as usize) < bodies.len());
+            if cov.normals.len() != cov.shares.len() && owned && !bodies.is_empty() {
+                Self::write_normals(cov, bodies);
+            }
+        }
     }
 
     /// The solid collision operator of covered nodes.
@@ -2165,6 +2203,14 @@ impl<T: Real> FluidLattice<T> {
             flags: &self.flags,
         };
         let (src, layout) = (&self.buffers[range], self.layout);
+        if cov.normals.len() != cov.shares.len() {
+            // No wall directions (a coverage read from a checkpoint made with the form off, until the next
+            // re-mapping): no wall force.
+            cov.shares
+                .par_iter_mut()
+                .for_each(|s| s.wall_gradient = [T::zero(); 2]);
+            return;
+        }
         let (nodes, offsets, links, normals) = (&cov.nodes, &cov.offsets, &cov.links, &cov.normals);
         let mut work = Vec::with_capacity(nodes.len().div_ceil(CHUNK));
         let mut rest = &mut cov.shares[..];

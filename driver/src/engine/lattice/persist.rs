@@ -143,7 +143,7 @@ impl<'de, T: Real + Deserialize<'de>> Deserialize<'de> for FluidLattice<T> {
                 && c.nodes.windows(2).all(|w| w[0] < w[1])
                 && c.owners.len() == n
                 && c.share_nodes.len() == n
-                && c.normals.len() == n
+                && (c.normals.len() == n || c.normals.is_empty())
                 && c.normals
                     .iter()
                     .all(|v| v[0].is_finite() && v[1].is_finite())
