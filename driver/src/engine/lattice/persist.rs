@@ -144,9 +144,11 @@ impl<'de, T: Real + Deserialize<'de>> Deserialize<'de> for FluidLattice<T> {
                 && c.owners.len() == n
                 && c.share_nodes.len() == n
                 && (c.normals.len() == n || c.normals.is_empty())
-                && c.normals
-                    .iter()
-                    .all(|v| v[0].is_finite() && v[1].is_finite())
+                && c.normals.iter().all(|v| {
+                    // A wall normal is of unit length, or zero where there is no direction.
+                    let len = (v[0] * v[0] + v[1] * v[1]).to_f64_exact();
+                    len.is_finite() && (len == 0.0 || (len - 1.0).abs() <= 1e-5)
+                })
                 && c.exchange.len() == n;
             if !consistent {
                 return Err(D::Error::custom(
