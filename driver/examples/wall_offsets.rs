@@ -7,7 +7,7 @@
 //! cargo run --release -p lbdem --example wall_offsets [-- 0.8]
 //! ```
 //! (the optional argument is τ; the offsets do not depend on it). About two minutes; each case in both forms of ΩΛ
-//! (friction only, the default, and the wall-pressure form, `LambdaTerms::WALL_PRESSURE`). Cases, all periodic, τ = 0.8:
+//! (friction only, `LambdaTerms::FRICTION_ONLY`, and the wall-pressure form, `LambdaTerms::WALL_PRESSURE`, the default). Cases, all periodic, τ = 0.8:
 //! * **body-force channel**: plane Poiseuille flow along x between two solid slabs whose faces cut cell rows
 //!   (solid fractions ε of the cut cells given), driven by a uniform body force;
 //! * **pressure-driven section**: the same narrow channel over 80 of 320 columns, the rest a wide channel with

@@ -246,15 +246,23 @@ fn consolidation_peak(stiffness_factor: f64, timestep_factor: f64) -> (f64, f64,
 
 #[test]
 fn consolidation_peak_pressure_comes_sooner_with_stiffer_grains_and_a_faster_fluid() {
-    // Stiffness 1, 16, 64 (lattice units at the scene's Δt): measured peaks at 0.24, 0.16, 0.16 s. Softer
+    // Stiffness 1, 16, 64 (lattice units at the scene's Δt): measured peaks at 0.212, 0.164, 0.164 s. Softer
     // skeletons take longer to pass the load to the fluid (dissertation fig. 5.12: ~6 s soft to ~0.03 s stiff);
     // above k_n ~ 16 the fluid's own (inertial/drainage) time dominates, so only non-increase is asserted there,
-    // with an overall drop of at least 25 % (measured 33 %; the peak time is sampled every 10 steps = 4 ms).
+    // with an overall drop of at least 15 %: measured 23 % (the peak time is sampled every 10 steps = 4 ms, so
+    // 12 samples apart). With ΩΛ's friction-only form (the default before 2026-12-07) the peaks were 0.224,
+    // 0.156, 0.156 s (30 %) and the bound 25 %: under the wall-pressure form the stiff skeleton's
+    // drainage-dominated peak comes later, as from a less permeable pack (the form lowers the quick fracture
+    // pack's permeability by 60 %; README, "ΩΛ's wall-pressure form"). The bound was lowered with that change,
+    // and says so; it still fails if stiffness stops mattering.
     let soft = consolidation_peak(1.0 / 16.0, 1.0);
     let base = consolidation_peak(1.0, 1.0);
     let stiff = consolidation_peak(4.0, 1.0);
+    eprintln!(
+        "peak (time, pressure, final) at stiffness x1/16, x1, x4: {soft:?} {base:?} {stiff:?}"
+    );
     assert!(
-        soft.0 > base.0 && base.0 >= stiff.0 && stiff.0 < 0.75 * soft.0,
+        soft.0 > base.0 && base.0 >= stiff.0 && stiff.0 < 0.85 * soft.0,
         "peak times {soft:?} {base:?} {stiff:?}"
     );
     // The fluid carries the step load (loading efficiency ~1; the LB fluid is much stiffer than the pack) and

@@ -285,6 +285,7 @@ fn the_wall_pressure_form_switched_on_after_covering_equals_covering_with_it_on(
     // And the form is on in both: the friction-only run differs.
     let mut c = busy::<f64>(channel(), [1e-6, 0.0], 3.0 / 16.0);
     c.set_solid_operator(SolidOperator::LambdaConsistent);
+    c.set_lambda_terms(LambdaTerms::FRICTION_ONLY).unwrap();
     for _ in 0..9 {
         a.step();
         b.step();
@@ -315,8 +316,8 @@ fn bad_wall_pressure_settings_are_refused_naming_the_field() {
             .to_string();
         assert!(err.contains("lambda friction"), "{err}");
     }
-    // The lattice keeps its constants.
-    assert_eq!(l.lambda_terms(), LambdaTerms::FRICTION_ONLY);
+    // The lattice keeps its constants (the default, the wall-pressure form).
+    assert_eq!(l.lambda_terms(), LambdaTerms::WALL_PRESSURE);
     // Normals for a solid given cell by cell: unit or zero, finite; the node is named.
     let mut f = FluidLattice::<f64>::new(
         8,

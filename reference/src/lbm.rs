@@ -362,7 +362,7 @@ pub fn psm_with_collision(
 pub const LAMBDA_FRICTION: f64 = 1.21;
 
 /// ΩΛ's wall-pressure constant α (`lbdem_kernels::fluid::collide::LAMBDA_PRESSURE`, restated): a partly
-/// covered node's fluid gets (ε_s/Σε) α B c_s² ∇ₜρ_s from each solid s, which takes the opposite.
+/// covered node's fluid gets (ε_s/Σε) α B (1 − B/2) c_s² ∇ₜρ_s from each solid s, which takes the opposite.
 pub const LAMBDA_PRESSURE: f64 = 2.0;
 
 /// ΩΛ's friction constant in its wall-pressure form (`lbdem_kernels::fluid::collide::LAMBDA_WALL_FRICTION`,
@@ -384,7 +384,7 @@ pub const LAMBDA_FULL_GAP: f64 = 0.05;
 ///   Σ_s (ε_s/Σε) P_s and solid s receives −(ε_s/Σε) Σ_i c_i (P_{s,i} − f_i).
 /// * otherwise (0 < Σ ε_s < 1 − [`LAMBDA_FULL_GAP`]), with Λ⁺ = τ − ½, Λ⁻ = τ⁻ − ½, B = ε (or ε√(Λ⁺Λ⁻)/((1 − ε) + √(Λ⁺Λ⁻)) for the NT weighting):
 ///   TRT with τ⁺_loc = ½ + Λ⁺/(1 − B), τ⁻_loc = ½ + Λ⁻(1 − B) and the force F = F_e + Σ_s F_s, where
-///   F_e = (1 − B) F_body + Σ_s P_s with the wall-pressure forces P_s = (ε_s/Σε) α B ∇ₜρ_s / 3
+///   F_e = (1 − B) F_body + Σ_s P_s with the wall-pressure forces P_s = (ε_s/Σε) α B (2 − B) ∇ₜρ_s / 6
 ///   (α and κ the last argument, ∇ₜρ_s = `wall_gradient`), and the frictions
 ///   F_s = −κ Λ⁺ B (ε_s/Σε) ρ (u − u_s), u the velocity of that forced collision, u = (Σ f c + F/2)/ρ (solved:
 ///   u (1 + κΛ⁺B/2) = (Σ f c + F_e/2)/ρ + Σ_s κΛ⁺B (ε_s/Σε) u_s/2); solid s receives −(F_s + P_s).
@@ -448,7 +448,7 @@ pub fn psm_lambda(
     };
     let beta = kappa * lambda_plus * b;
     let push = |s: &Solid| {
-        let k = s.fraction / eps * alpha * b / 3.0;
+        let k = s.fraction / eps * alpha * b * (2.0 - b) / 6.0;
         [k * s.wall_gradient[0], k * s.wall_gradient[1]]
     };
     let mut body = [(1.0 - b) * force[0], (1.0 - b) * force[1]];

@@ -2032,7 +2032,7 @@ impl<T: Real> FluidLattice<T> {
         self.refresh_normals();
     }
 
-    /// Set ΩΛ's constants ([`LambdaTerms::FRICTION_ONLY`], the default, or [`LambdaTerms::WALL_PRESSURE`]).
+    /// Set ΩΛ's constants ([`LambdaTerms::WALL_PRESSURE`], the default, or [`LambdaTerms::FRICTION_ONLY`]).
     /// Refused for a friction or wall-pressure constant that is negative or not finite. Switching the
     /// wall-pressure form on computes the wall normals of a coverage made by [`FluidLattice::cover_with_bodies`]
     /// from that call's bodies; a body coverage read from a checkpoint saved with the form off has none until

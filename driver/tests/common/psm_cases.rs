@@ -76,14 +76,15 @@ pub struct Method {
 }
 
 impl Method {
-    /// TRT (Λ = 3/16) with ΩΛ and B = ε: the τ-independent method.
+    /// TRT (Λ = 3/16) with ΩΛ and B = ε, ΩΛ in its friction-only form (`LambdaTerms::FRICTION_ONLY`, the
+    /// default until 2026-12-07): the τ-independent method the earlier tests were written for.
     pub const LAMBDA: Method = Method {
         fluid: Fluid::Trt(3.0 / 16.0),
         solid: SolidOperator::LambdaConsistent,
         weighting: Weighting::SolidFraction,
         lambda: LambdaTerms::FRICTION_ONLY,
     };
-    /// [`Method::LAMBDA`] in ΩΛ's wall-pressure form ([`LambdaTerms::WALL_PRESSURE`]).
+    /// [`Method::LAMBDA`] in ΩΛ's wall-pressure form ([`LambdaTerms::WALL_PRESSURE`], the default).
     pub const LAMBDA_WALL: Method = Method {
         lambda: LambdaTerms::WALL_PRESSURE,
         ..Method::LAMBDA
