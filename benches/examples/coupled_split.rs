@@ -6,19 +6,26 @@
 //! (defaults 1000 500 10 0.7). Each configuration runs `steps` steps after 3 warm-up steps, repeated 3 times;
 //! the repeat with the smallest total is printed (least disturbed by other processes on a shared machine).
 //! `LBDEM_SOLID_OPERATOR=lambda` runs TRT (Λ = 3/16) + ΩΛ (`LambdaConsistent`, the fracture scenes' default, whose
-//! re-mapping also computes the open-link masks) instead of the bench scene's BGK + Ω₁ₗ.
+//! re-mapping also computes the open-link masks) instead of the bench scene's BGK + Ω₁ₗ; with it,
+//! `LBDEM_LAMBDA_TERMS=friction` turns ΩΛ's wall-pressure force off (`LambdaTerms::FRICTION_ONLY`).
 #[path = "../src/coupled_scene.rs"]
 mod coupled_scene;
 
 use std::time::Duration;
 
 use lbdem::engine::coupled::StepTimings;
-use lbdem_kernels::fluid::collide::{Collision, SolidOperator, Trt};
+use lbdem_kernels::fluid::collide::{Collision, LambdaTerms, SolidOperator, Trt};
 use lbdem_kernels::Real;
 
 /// Whether `LBDEM_SOLID_OPERATOR=lambda` asks for TRT + ΩΛ.
 fn lambda() -> bool {
     std::env::var("LBDEM_SOLID_OPERATOR").is_ok_and(|v| v == "lambda")
+}
+
+/// Whether `LBDEM_LAMBDA_TERMS=friction` asks for ΩΛ without its wall-pressure force (the form before it became
+/// the default), to price that force side by side in one binary.
+fn friction_only() -> bool {
+    std::env::var("LBDEM_LAMBDA_TERMS").is_ok_and(|v| v == "friction")
 }
 
 fn ms(d: Duration, steps: u64) -> f64 {
@@ -49,6 +56,11 @@ fn run<T: Real>(
                 .set_collision(Collision::Trt(trt))
                 .expect("TRT at τ = 0.8");
             w.fluid.set_solid_operator(SolidOperator::LambdaConsistent);
+            if friction_only() {
+                w.fluid
+                    .set_lambda_terms(LambdaTerms::FRICTION_ONLY)
+                    .expect("friction-only ΩΛ");
+            }
         }
         let t = pool.install(|| {
             for _ in 0..3 {
@@ -73,7 +85,11 @@ fn run<T: Real>(
     println!(
         "{} {precision} {threads}T r={radius}: {:.2} ms/step, {mlups:.1} MLUPS-eq | fluid {:.2} ms ({:.0} %) | \
          coverage {:.2} ms ({:.0} %) | coupling {:.2} ms ({:.0} %) | dem {:.2} ms ({:.0} %) | covered nodes {covered} | densities in [0.9, 1.1]: {healthy}",
-        if lambda() { "TRT+ΩΛ" } else { "BGK+Ω₁ₗ" },
+        match (lambda(), friction_only()) {
+            (true, true) => "TRT+ΩΛ(friction only)",
+            (true, false) => "TRT+ΩΛ",
+            _ => "BGK+Ω₁ₗ",
+        },
         ms(total, steps),
         ms(t.fluid, steps),
         pct(t.fluid),
