@@ -12,7 +12,7 @@ use lbdem::kinds::cylinder_array::{solve_array, ArrayCase};
 use lbdem::kinds::porous_flow::{
     darcy_fit, fitted_kozeny_constant, solve_porous, PorousCase, PorousOutcome,
 };
-use lbdem_kernels::fluid::collide::{Collision, SolidOperator};
+use lbdem_kernels::fluid::collide::{Collision, LambdaTerms, SolidOperator};
 
 fn diameter(pitch: usize, c: f64) -> f64 {
     2.0 * pitch as f64 * (c / std::f64::consts::PI).sqrt()
@@ -39,6 +39,7 @@ fn slab(
         walls: false,
         tau: 0.8,
         solid_operator: SolidOperator::NonEquilibriumBounceBack,
+        lambda_terms: LambdaTerms::default(),
         collision: Collision::Bgk,
         density_drop: drho,
         steady_tolerance: tol,

@@ -15,7 +15,7 @@
 //! or Δt, derives the other, and prints every derived figure at start-up.
 use serde::{Deserialize, Serialize};
 
-use lbdem_kernels::fluid::collide::{Collision, CollisionError, Trt};
+use lbdem_kernels::fluid::collide::{Collision, CollisionError, LambdaTerms, SolidOperator, Trt};
 use lbdem_kernels::Real;
 
 use crate::error::{positive, LbdemError, Result};
@@ -109,6 +109,60 @@ pub struct FluidSection {
     /// Only with `collision = "trt"` (or a kind whose default is TRT).
     #[serde(default)]
     pub magic: Option<f64>,
+    /// ΩΛ's form: `"wall_pressure"` (the default) or `"friction_only"` ([`LambdaForm`]). Only with the solid
+    /// operator `"lambda_consistent"` (ΩΛ); refused with any other.
+    #[serde(default)]
+    pub lambda_form: Option<LambdaForm>,
+}
+
+/// The form of ΩΛ (`SolidOperator::LambdaConsistent`) a scene asks for (`[fluid] lambda_form`): which of ΩΛ's
+/// terms act at partly covered nodes ([`LambdaTerms`]).
+#[derive(Clone, Copy, Debug, Deserialize, Serialize, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum LambdaForm {
+    /// Friction κ = 0.5 plus the wall-pressure force along each solid's surface
+    /// ([`LambdaTerms::WALL_PRESSURE`]): the default, the square arrays within 1 % of Sangani & Acrivos at
+    /// l = 40 nodes and every τ.
+    WallPressure,
+    /// Friction κ = 1.21 alone ([`LambdaTerms::FRICTION_ONLY`]): ΩΛ's first form, the default until
+    /// 2026-12-07; unstable in dense packs of partly covered throats (README, "ΩΛ's wall-pressure form").
+    FrictionOnly,
+}
+
+impl LambdaForm {
+    /// The constants of this form.
+    pub fn terms(self) -> LambdaTerms {
+        match self {
+            LambdaForm::WallPressure => LambdaTerms::WALL_PRESSURE,
+            LambdaForm::FrictionOnly => LambdaTerms::FRICTION_ONLY,
+        }
+    }
+
+    /// The scene word of this form.
+    pub fn name(self) -> &'static str {
+        match self {
+            LambdaForm::WallPressure => "wall_pressure",
+            LambdaForm::FrictionOnly => "friction_only",
+        }
+    }
+}
+
+/// The solid operator `op` by its scene word, with ΩΛ's form and constants from `fluid` (e.g.
+/// `lambda_consistent (wall_pressure: kappa 0.5, alpha 2)`), for the set-up a run prints. Refuses a form given
+/// with another operator, as [`FluidSection::lambda_terms`].
+pub fn describe_operator(op: SolidOperator, fluid: &FluidSection) -> Result<String> {
+    let terms = fluid.lambda_terms(op)?;
+    if op != SolidOperator::LambdaConsistent {
+        return Ok(op.name().to_string());
+    }
+    let form = fluid.lambda_form.unwrap_or(LambdaForm::WallPressure);
+    Ok(format!(
+        "{} ({}: kappa {}, alpha {})",
+        op.name(),
+        form.name(),
+        terms.friction,
+        terms.pressure
+    ))
 }
 
 /// The fluid collision a scene asks for (`[fluid] collision`); its parameter is `[fluid] magic`.
@@ -231,6 +285,25 @@ impl FluidSection {
                     "use magic = 0.1875 (3/16), or a tau farther from 1/2",
                 ))
             }
+        }
+    }
+
+    /// ΩΛ's constants for a run whose solid operator is `op`: those of `[fluid] lambda_form` (default the
+    /// wall-pressure form). Refuses, naming `fluid.lambda_form`, a form given with an operator other than ΩΛ
+    /// (which has no such terms: the key would be silently ignored).
+    pub fn lambda_terms(&self, op: SolidOperator) -> Result<LambdaTerms> {
+        match self.lambda_form {
+            Some(form) if op != SolidOperator::LambdaConsistent => Err(LbdemError::field(
+                "fluid.lambda_form",
+                form.name(),
+                &format!(
+                    "chooses a form of the solid operator \"lambda_consistent\" (OmegaLambda), but this run's \
+                     solid operator is \"{}\", which has no such form",
+                    op.name()
+                ),
+                "remove fluid.lambda_form, or set the scene's solid_operator = \"lambda_consistent\"",
+            )),
+            form => Ok(form.unwrap_or(LambdaForm::WallPressure).terms()),
         }
     }
 
@@ -668,6 +741,7 @@ mod tests {
             timestep: dt,
             collision: None,
             magic: None,
+            lambda_form: None,
         }
     }
 

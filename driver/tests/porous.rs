@@ -9,7 +9,7 @@
 //! table of exactly the cases asserted here.
 use lbdem::kinds::cylinder_array::{solve_array, ArrayCase};
 use lbdem::kinds::porous_flow::{darcy_fit, fitted_kozeny_constant, solve_porous, PorousCase};
-use lbdem_kernels::fluid::collide::{Collision, SolidOperator};
+use lbdem_kernels::fluid::collide::{Collision, LambdaTerms, SolidOperator};
 
 /// The fast porous-slab case used below: `columns` × `rows` discs of diameter `d` at pitch `pitch`, τ = 0.8,
 /// Ω₁, periodic north/south, half a pitch of free fluid before and after the array.
@@ -25,6 +25,7 @@ fn slab(columns: usize, rows: usize, pitch: usize, d: f64, density_drop: f64) ->
         walls: false,
         tau: 0.8,
         solid_operator: SolidOperator::NonEquilibriumBounceBack,
+        lambda_terms: LambdaTerms::default(),
         collision: Collision::Bgk,
         density_drop,
         steady_tolerance: 1e-8,

@@ -580,6 +580,7 @@ pub fn check_free_grain_fluid(
     warnings: &mut crate::units::Warnings,
 ) -> Result<()> {
     fluid.checked_collision(choice.0, tau)?;
+    fluid.lambda_terms(choice.1)?;
     check_free_grain_operator(field, choice.1, tau, grains, warnings)
 }
 

@@ -190,6 +190,7 @@ fn start(case: &Case<Consolidation>, exec: &Exec) -> Result<ConsolidationState> 
             .checked_collision(default_collision, u.tau)?,
     )?)?;
     fluid.set_solid_operator(op);
+    fluid.set_lambda_terms(case.scene.fluid.lambda_terms(op)?)?;
     let map = LatticeMap::of(u, [lo[0] - 0.5 * h, lo[1] - 0.5 * h]);
     let mut world = CoupledWorld::new(
         fluid,

@@ -23,7 +23,7 @@
 use std::path::Path;
 
 use lbdem_kernels::fluid::boundary::Boundaries;
-use lbdem_kernels::fluid::collide::{Collision, SolidOperator};
+use lbdem_kernels::fluid::collide::{Collision, LambdaTerms, SolidOperator};
 use lbdem_kernels::fluid::step::FluidParams;
 use lbdem_kernels::Real;
 use lbdem_reference::analytic::{sangani_acrivos_drag, SANGANI_ACRIVOS_SQUARE};
@@ -71,6 +71,9 @@ pub struct ArrayCase {
     pub force: f64,
     /// Solid operator of the PSM.
     pub solid_operator: SolidOperator,
+    /// ΩΛ's constants (`[fluid] lambda_form`; read only when the solid operator is ΩΛ).
+    #[serde(default)]
+    pub lambda_terms: LambdaTerms,
     /// Fluid collision (BGK, or TRT with its magic parameter).
     #[serde(default)]
     pub collision: Collision<f64>,
@@ -91,6 +94,7 @@ impl ArrayCase {
             tau,
             force: 0.0,
             solid_operator: SolidOperator::NonEquilibriumBounceBack,
+            lambda_terms: LambdaTerms::default(),
             collision: Collision::Bgk,
             steady_tolerance: 1e-7,
             check_interval: 100,
@@ -226,6 +230,7 @@ impl<T: Real> CaseRun for ArrayRun<T> {
         lattice.set_band_rows(l.div_ceil(2).max(1));
         lattice.set_collision(collision_of(case.collision)?)?;
         lattice.set_solid_operator(case.solid_operator);
+        lattice.set_lambda_terms(case.lambda_terms)?;
         lattice.cover_with_discs(&[case.disc()], case.solid_operator.weighting());
         let eps = lattice.solid_fraction_map();
         let mass0 = lattice.mass();
@@ -443,6 +448,7 @@ impl ArraySetup {
             tau: units.tau,
             force: 0.0,
             solid_operator: a.solid_operator,
+            lambda_terms: scene.fluid.lambda_terms(a.solid_operator)?,
             collision: scene.fluid.checked_collision(COLLISION, units.tau)?,
             steady_tolerance: scene.run.steady_tolerance.unwrap_or(1e-8),
             check_interval: scene.run.check_interval.unwrap_or(200),

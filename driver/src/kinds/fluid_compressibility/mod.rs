@@ -173,6 +173,7 @@ impl CompressibilityState {
             case.scene.fluid.checked_collision(collision, u.tau)?,
         )?)?;
         fluid.set_solid_operator(op);
+        fluid.set_lambda_terms(case.scene.fluid.lambda_terms(op)?)?;
         // The piston: an ellipse 2b = 3 nodes thick with its major axis along y, 50 × the box height long, so
         // its faces are flat to (H/2)²/(2a) · b/a ≈ 1e-5 nodes across the box. Fluid fills the chamber behind
         // it.
@@ -366,9 +367,9 @@ impl Kind for FluidCompressibility {
 
     fn validate(scene: &CompressibilityScene) -> Result<()> {
         let u = crate::scene::f64_bgk_units(&scene.scene, &scene.fluid)?;
-        scene
-            .fluid
-            .checked_collision(piston_operator(&scene.fluid_compressibility)?.0, u.tau)?;
+        let (collision, op) = piston_operator(&scene.fluid_compressibility)?;
+        scene.fluid.checked_collision(collision, u.tau)?;
+        scene.fluid.lambda_terms(op)?;
 
         let c = &scene.fluid_compressibility;
         positive("fluid_compressibility.length", c.length, "box length")?;

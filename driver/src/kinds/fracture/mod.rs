@@ -89,6 +89,10 @@ pub struct FractureFluid {
     /// TRT's magic parameter Λ (default 3/16).
     #[serde(default)]
     pub magic: Option<f64>,
+    /// ΩΛ's form, "wall_pressure" (the default) or "friction_only" ([`crate::units::LambdaForm`]); only with
+    /// the solid operator ΩΛ.
+    #[serde(default)]
+    pub lambda_form: Option<crate::units::LambdaForm>,
     /// Fraction of each grain's size the fluid sees (table 6.2: 0.6; table 6.3: 0.6–0.95).
     pub fluid_radius: f64,
     /// Free fluid beyond each end of the sample along x (default 0.3 cm).
@@ -131,6 +135,7 @@ impl FractureFluid {
             timestep: self.timestep,
             collision: self.collision,
             magic: self.magic,
+            lambda_form: self.lambda_form,
         }
     }
 }
@@ -545,7 +550,7 @@ impl FractureScene {
                     "  fluid: h = {h} {len}, dt = {dt:.4e} {t}, nu = {nu} {vi}, tau = {tau:.4}, c = {c:.4e} {v}, c_s = {cs:.4e} {v}, \
                      compressibility 1/(rho c_s^2) = {beta:.3e} 1/({pr})\n  \
                      lattice {nx} x {ny} = {nodes} nodes; fluid radius {fr}; {npg:.1} nodes across the smallest grain's minor axis as the fluid sees it\n  \
-                     pore density {hi:.5} -> ends {lo:.5} (lattice), expected Mach {ma:.3}; solid operator {op:?}, weighting {wt:?}\n",
+                     pore density {hi:.5} -> ends {lo:.5} (lattice), expected Mach {ma:.3}; solid operator {op}, weighting {wt:?}\n",
                     h = u.spacing,
                     dt = u.timestep,
                     nu = u.viscosity,
@@ -561,7 +566,7 @@ impl FractureScene {
                     hi = fs.density_high,
                     lo = fs.density_low,
                     ma = fs.expected_mach,
-                    op = fs.solid_operator,
+                    op = crate::units::describe_operator(fs.solid_operator, &f.section())?,
                     wt = f.weighting(fs.solid_operator),
                     len = labels.length,
                     t = labels.time,
@@ -848,6 +853,7 @@ pub fn prepare_packed(scene: &FractureScene, packing: Packing<f64>) -> Result<Fr
                     .checked_collision(setup.collision_default, u.tau)?,
             )?)?;
             lattice.set_solid_operator(setup.solid_operator);
+            lattice.set_lambda_terms(f.section().lambda_terms(setup.solid_operator)?)?;
             lattice.set_remap_tolerance(f.remap_tolerance)?;
             let map = LatticeMap {
                 spacing: u.spacing,
@@ -955,6 +961,7 @@ impl<'a, S: std::ops::Deref<Target = FractureState>> FractureRun<'a, S> {
         let mut lattice = FluidLattice::new(nx, ny, bc, params)?;
         lattice.set_collision(fp.world.fluid.collision())?;
         lattice.set_solid_operator(fp.world.fluid.solid_operator());
+        lattice.set_lambda_terms(fp.world.fluid.lambda_terms())?;
         Ok(lattice)
     }
 

@@ -20,7 +20,7 @@
 use std::path::Path;
 
 use lbdem_kernels::fluid::boundary::{Boundaries, SideCondition};
-use lbdem_kernels::fluid::collide::{Collision, SolidOperator};
+use lbdem_kernels::fluid::collide::{Collision, LambdaTerms, SolidOperator};
 use lbdem_kernels::fluid::step::FluidParams;
 use lbdem_kernels::Real;
 use lbdem_reference::analytic::{kozeny_constant, sangani_acrivos_tabulated};
@@ -82,6 +82,9 @@ pub struct PorousCase {
     pub tau: f64,
     /// Solid operator of the PSM.
     pub solid_operator: SolidOperator,
+    /// ΩΛ's constants (`[fluid] lambda_form`; read only when the solid operator is ΩΛ).
+    #[serde(default)]
+    pub lambda_terms: LambdaTerms,
     /// Fluid collision (BGK, or TRT with its magic parameter).
     #[serde(default)]
     pub collision: Collision<f64>,
@@ -340,6 +343,7 @@ impl<T: Real> CaseRun for PorousRun<T> {
         exec.apply(&mut lattice);
         lattice.set_collision(collision_of(case.collision)?)?;
         lattice.set_solid_operator(case.solid_operator);
+        lattice.set_lambda_terms(case.lambda_terms)?;
         lattice.set_band_rows(ny.div_ceil(2).max(1));
         let discs = case.discs();
         lattice.cover_with_discs(&discs, case.solid_operator.weighting());
@@ -692,6 +696,7 @@ impl PorousSetup {
                     walls: p.north_south == NorthSouth::Walls,
                     tau: units.tau,
                     solid_operator: p.solid_operator,
+                    lambda_terms: scene.fluid.lambda_terms(p.solid_operator)?,
                     collision: scene.fluid.checked_collision(COLLISION, units.tau)?,
                     density_drop: drho,
                     steady_tolerance: scene.run.steady_tolerance.unwrap_or(1e-8),
@@ -942,6 +947,7 @@ mod tests {
             walls: false,
             tau: 0.8,
             solid_operator: SolidOperator::NonEquilibriumBounceBack,
+            lambda_terms: LambdaTerms::default(),
             collision: Collision::Bgk,
             density_drop: 1e-3,
             steady_tolerance: 1e-8,

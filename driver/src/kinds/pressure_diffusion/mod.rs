@@ -291,6 +291,7 @@ fn start(case: &Case<PressureDiffusion>, exec: &Exec) -> Result<DiffusionState> 
             case.scene.fluid.checked_collision(default_collision, tau)?,
         )?)?;
         f.set_solid_operator(op);
+        f.set_lambda_terms(case.scene.fluid.lambda_terms(op)?)?;
         f.cover_with_bodies(&bodies, wf);
         Ok(f)
     };
@@ -601,9 +602,9 @@ impl Kind for PressureDiffusion {
 
     fn validate(scene: &PressureDiffusionScene) -> Result<()> {
         let u = crate::scene::f64_bgk_units(&scene.scene, &scene.fluid)?;
-        scene
-            .fluid
-            .checked_collision(fluid_choice(scene).0, u.tau)?;
+        let (collision, op) = fluid_choice(scene);
+        scene.fluid.checked_collision(collision, u.tau)?;
+        scene.fluid.lambda_terms(op)?;
 
         let d = &scene.pressure_diffusion;
         positive("pressure_diffusion.width", d.width, "slab width")?;

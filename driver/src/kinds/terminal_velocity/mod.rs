@@ -281,6 +281,9 @@ fn start(case: &Case<TerminalVelocity>, exec: &Exec) -> Result<TerminalState> {
         op.weighting(),
     )?;
     exec.apply(&mut world.fluid);
+    world
+        .fluid
+        .set_lambda_terms(case.scene.fluid.lambda_terms(op)?)?;
     let p0 = total_momentum(&world);
     Ok(TerminalState {
         world,
@@ -608,5 +611,37 @@ impl Kind for TerminalVelocity {
         // The series is in series.csv.
         o.records.clear();
         Ok(serde_json::to_value(&o).unwrap_or_default())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use lbdem_kernels::fluid::collide::LambdaTerms;
+
+    /// The bundled scene with `[fluid] lambda_form = form` (none for `None`).
+    fn scene_with(form: Option<&str>) -> String {
+        let text = include_str!("../../../../scenes/terminal_velocity.toml");
+        match form {
+            None => text.to_string(),
+            Some(f) => text.replace("[fluid]\n", &format!("[fluid]\nlambda_form = \"{f}\"\n")),
+        }
+    }
+
+    #[test]
+    fn the_started_world_runs_the_form_the_scene_names() {
+        for (form, terms) in [
+            (None, LambdaTerms::WALL_PRESSURE),
+            (Some("wall_pressure"), LambdaTerms::WALL_PRESSURE),
+            (Some("friction_only"), LambdaTerms::FRICTION_ONLY),
+        ] {
+            let case = Case::<TerminalVelocity>::read(&scene_with(form), "t.toml").unwrap();
+            let state = TerminalVelocity::start(&case, &Exec::default()).unwrap();
+            assert_eq!(
+                state.world.fluid.solid_operator(),
+                SolidOperator::LambdaConsistent
+            );
+            assert_eq!(state.world.fluid.lambda_terms(), terms, "{form:?}");
+        }
     }
 }

@@ -5,7 +5,7 @@ use std::path::Path;
 use lbdem_kernels::coupling::CoupledBody;
 use lbdem_kernels::dem::assembly::ContactModel;
 use lbdem_kernels::fluid::boundary::{Boundaries, SideCondition};
-use lbdem_kernels::fluid::collide::SolidOperator;
+use lbdem_kernels::fluid::collide::{LambdaTerms, SolidOperator};
 use lbdem_kernels::fluid::lattice::Side;
 use lbdem_kernels::fluid::step::FluidParams;
 use lbdem_kernels::math::{vector, Vector};
@@ -501,7 +501,7 @@ fn layer_height(dem: &DemWorld<f64>, loaded: &[usize]) -> f64 {
 }
 
 /// The lattice of the column: walls west, east and south on the platens, `north` on top, the kind's collision
-/// and solid operator.
+/// and solid operator (with ΩΛ's constants `lambda`).
 fn column_lattice(
     nx: usize,
     ny: usize,
@@ -509,7 +509,7 @@ fn column_lattice(
     params: FluidParams<f64>,
     exec: &Exec,
     collision: lbdem_kernels::fluid::collide::Collision<f64>,
-    op: SolidOperator,
+    (op, lambda): (SolidOperator, LambdaTerms),
 ) -> Result<FluidLattice<f64>> {
     let mut fluid = FluidLattice::<f64>::new(
         nx,
@@ -525,6 +525,7 @@ fn column_lattice(
     exec.apply(&mut fluid);
     fluid.set_collision(collision_of(collision)?)?;
     fluid.set_solid_operator(op);
+    fluid.set_lambda_terms(lambda)?;
     Ok(fluid)
 }
 
@@ -746,6 +747,7 @@ fn start(case: &Case<Terzaghi>, exec: &Exec) -> Result<TerzaghiState> {
         .scene
         .fluid
         .checked_collision(default_collision, u.tau)?;
+    let lambda = case.scene.fluid.lambda_terms(op)?;
     let fluid = column_lattice(
         nx,
         ny,
@@ -753,7 +755,7 @@ fn start(case: &Case<Terzaghi>, exec: &Exec) -> Result<TerzaghiState> {
         params,
         exec,
         collision,
-        op,
+        (op, lambda),
     )?;
     // The rule (and the refusal) of the budget, which `check` printed.
     let substeps = limits::dem_substeps(
@@ -774,7 +776,7 @@ fn start(case: &Case<Terzaghi>, exec: &Exec) -> Result<TerzaghiState> {
             params,
             exec,
             collision,
-            op,
+            (op, lambda),
         )?;
         lid.set_side_profile(Side::North, &vec![[0.0; 2]; nx])?;
         let mut w = CoupledWorld::new(
@@ -825,6 +827,7 @@ fn start(case: &Case<Terzaghi>, exec: &Exec) -> Result<TerzaghiState> {
     exec.apply(&mut darcy);
     darcy.set_collision(collision_of(collision)?)?;
     darcy.set_solid_operator(op);
+    darcy.set_lambda_terms(lambda)?;
     darcy.cover_with_bodies(&bodies, op.weighting());
     // Fluid-only nodes start on the linear profile, covered ones at ρ₀: the storage fraction measured at the
     // steady state is then what the covered nodes took up during the run, not an initial condition.
