@@ -32,8 +32,8 @@ use lbdem_kernels::fluid::lattice::{LatticeShape, Side};
 use lbdem_kernels::fluid::step::{
     band_mut, classify_special_nodes, collide_covered_list, collide_covered_nodes,
     collide_planned_row, gather_node, gathered_moments, nodes_in_rows, open_links,
-    plan_covered_row, planes, planes_mut, step_band, stream_periodic, wall_densities,
-    wall_gradients, CoveredNodes, Domain, FluidParams, FLUID, PLAN_GROUPS, SOLID,
+    plan_covered_row, planes, planes_mut, step_band, stream_periodic, wall_gradients, CoveredNodes,
+    Domain, FluidParams, FLUID, PLAN_GROUPS, SOLID,
 };
 use lbdem_kernels::Real;
 use lbdem_reference::analytic;
@@ -730,68 +730,15 @@ fn kernel_step<T: Real>(
             let count = (offsets[k + 1] - offsets[k]) as usize;
             normals.extend((0..count).map(|j| test_normal(n, j).map(T::lit)));
         }
-        // The densities once per partly covered node, then the gradients; the same gradients, bit for bit,
-        // with no density cached (every one gathered again) and with the nodes split in two: the cache and
-        // the split are speed only.
-        let mut rho = vec![T::nan(); nodes.len()];
-        wall_densities(
+        wall_gradients(
             &domain,
             &src,
             Layout::Collided,
             &nodes,
             &offsets,
-            &shares,
-            &mut rho,
-        );
-        let mut uncached = shares.clone();
-        wall_gradients(
-            &domain,
-            &src,
-            Layout::Collided,
-            (&nodes, &vec![-T::one(); nodes.len()], 0),
-            &offsets,
             &links,
             &normals,
-            &mut uncached,
-        );
-        let mid = nodes.len() / 2;
-        let cut = offsets[mid] as usize;
-        let (lo, hi) = shares.split_at_mut(cut);
-        wall_gradients(
-            &domain,
-            &src,
-            Layout::Collided,
-            (&nodes, &rho, 0),
-            &offsets[..=mid],
-            &links[..mid],
-            &normals[..cut],
-            lo,
-        );
-        wall_gradients(
-            &domain,
-            &src,
-            Layout::Collided,
-            (&nodes, &rho, mid),
-            &offsets[mid..],
-            &links[mid..],
-            &normals[cut..],
-            hi,
-        );
-        let bits = |v: &[SolidShare<T>]| -> Vec<[f64; 2]> {
-            v.iter()
-                .map(|s| s.wall_gradient.map(|g| g.to_f64_exact()))
-                .collect()
-        };
-        assert_eq!(
-            bits(&shares)
-                .iter()
-                .map(|g| g.map(f64::to_bits))
-                .collect::<Vec<_>>(),
-            bits(&uncached)
-                .iter()
-                .map(|g| g.map(f64::to_bits))
-                .collect::<Vec<_>>(),
-            "cached and split wall gradients differ from gathered ones"
+            &mut shares,
         );
     }
     let mut exchange = vec![[T::nan(); 2]; shares.len()];

@@ -25,8 +25,8 @@ use lbdem_kernels::fluid::lattice::{LatticeShape, Side};
 use lbdem_kernels::fluid::step::{
     classify_special_nodes, collide_covered_nodes, collide_planned_row, covered_node_value,
     fix_special_nodes, gather_node_in, gathered_moments_in, nodes_in_rows, open_links,
-    plan_covered_row, planes_mut, special_node_value, wall_densities, wall_gradients, CoveredNodes,
-    Domain, FluidParams, FLUID, PLAN_GROUPS, SOLID,
+    plan_covered_row, planes_mut, special_node_value, wall_gradients, CoveredNodes, Domain,
+    FluidParams, FLUID, PLAN_GROUPS, SOLID,
 };
 use lbdem_kernels::math::{Point, Vector};
 use lbdem_kernels::Real;
@@ -100,9 +100,6 @@ pub struct FluidLattice<T: Real> {
     /// In-place scheme: new values of the special and covered nodes, computed before the bulk pass.
     aa_special: Vec<[T; Q]>,
     aa_covered: Vec<Option<[T; Q]>>,
-    /// ΩΛ's wall-pressure form: the density of each covered node the wall gradients read
-    /// ([`wall_densities`]), refilled before every step.
-    wall_rho: Vec<T>,
     /// In-place scheme: the covered nodes that are special (indices into the covered list), those of
     /// `aa_covered`, and the identities (coverage layout, special list) they were found for: they are kept
     /// while both lists stand (between re-mappings under a remap tolerance, or with bodies that keep their
@@ -1086,7 +1083,6 @@ impl<T: Real> FluidLattice<T> {
             layout: Layout::Collided,
             aa_special: Vec::new(),
             aa_covered: Vec::new(),
-            wall_rho: Vec::new(),
             aa_covered_special: Vec::new(),
             aa_covered_special_key: None,
             aa_covered_special_found: 0,
@@ -2216,25 +2212,6 @@ impl<T: Real> FluidLattice<T> {
             return;
         }
         let (nodes, offsets, links, normals) = (&cov.nodes, &cov.offsets, &cov.links, &cov.normals);
-        // 1. The density of each partly covered node, once (a gather per node: most of the pass's time).
-        let rho = &mut self.wall_rho;
-        rho.resize(nodes.len(), T::zero());
-        rho.par_chunks_mut(CHUNK).enumerate().for_each(|(c, rho)| {
-            let k0 = c * CHUNK;
-            let k1 = k0 + rho.len();
-            let (a, b) = (offsets[k0] as usize, offsets[k1] as usize);
-            wall_densities(
-                &domain,
-                src,
-                layout,
-                &nodes[k0..k1],
-                &offsets[k0..=k1],
-                &cov.shares[a..b],
-                rho,
-            );
-        });
-        let rho = &self.wall_rho[..];
-        // 2. The gradients, from those densities (and gathers at the uncovered neighbours).
         let mut work = Vec::with_capacity(nodes.len().div_ceil(CHUNK));
         let mut rest = &mut cov.shares[..];
         for k0 in (0..nodes.len()).step_by(CHUNK) {
@@ -2250,7 +2227,7 @@ impl<T: Real> FluidLattice<T> {
                 &domain,
                 src,
                 layout,
-                (nodes, rho, k0),
+                &nodes[k0..k1],
                 &offsets[k0..=k1],
                 &links[k0..k1],
                 &normals[a..b],

@@ -1149,125 +1149,71 @@ pub fn open_links<T: Real>(
     open
 }
 
-/// Whether a covered node gets ΩΛ's wall force: not an obstacle and partly covered (0 < Σε < 1 −
-/// [`super::collide::LAMBDA_FULL_GAP`], the fractions summed in the collision's order).
-#[inline]
-fn wall_partial<T: Real>(flag: u8, shares: &[SolidShare<T>]) -> bool {
-    let mut eps_sum = T::zero();
-    for s in shares {
-        eps_sum += s.fraction;
-    }
-    flag != SOLID && eps_sum > T::zero() && !super::collide::lambda_fully_covered(eps_sum)
-}
-
-/// The density the step about to run gathers at node `n` (its populations from `src` in `layout`, summed by
-/// [`density`]).
-#[inline]
-fn gathered_density<T: Real>(domain: &Domain<'_, T>, src: &[T], layout: Layout, n: usize) -> T {
-    let (x, y) = domain.shape.coords(n);
-    density(&gather_node_in(
-        &domain.shape,
-        src,
-        layout,
-        &domain.bc,
-        &domain.profiles,
-        domain.flags,
-        x,
-        y,
-    ))
-}
-
-/// The densities ΩΛ's wall gradients ([`wall_gradients`]) start from, once per node: `rho[k]` is the density
-/// the step about to run gathers at `nodes[k]` (from `src` in `layout`) where that node is partly covered and
-/// not an obstacle (node k has the shares `shares[offsets[k] − offsets[0] .. offsets[k + 1] − offsets[0]]`),
-/// and −1 (not computed) at every other node. `rho` must be as long as `nodes`. Reads only `src`, so any
-/// split of the nodes gives the same values.
-pub fn wall_densities<T: Real>(
-    domain: &Domain<'_, T>,
-    src: &[T],
-    layout: Layout,
-    nodes: &[u32],
-    offsets: &[u32],
-    shares: &[SolidShare<T>],
-    rho: &mut [T],
-) {
-    let first = offsets.first().copied().unwrap_or(0) as usize;
-    for (k, (&node, r)) in nodes.iter().zip(rho.iter_mut()).enumerate() {
-        let (a, b) = (offsets[k] as usize - first, offsets[k + 1] as usize - first);
-        let n = node as usize;
-        *r = if wall_partial(domain.flags[n], &shares[a..b]) {
-            gathered_density(domain, src, layout, n)
-        } else {
-            -T::one()
-        };
-    }
-}
-
-/// ΩΛ's wall gradients ([`SolidShare::wall_gradient`]) of the covered nodes `all_nodes[k0 .. k0 + m]`
-/// (`all_nodes` the coverage's whole sorted node list, `rho` its [`wall_densities`]; node k0 + i has the shares
-/// `shares[offsets[i] − offsets[0] .. offsets[i + 1] − offsets[0]]`, the open links `links[i]`, and each share
-/// s the unit normal `normals[s − offsets[0]]` of its solid's surface; m = `offsets.len()` − 1), from the
-/// populations `src` in `layout` as the step about to run will gather them: at a partly covered node (0 < Σε <
-/// 1 − [`super::collide::LAMBDA_FULL_GAP`], not an obstacle) each share gets [`super::collide::wall_gradient`]
-/// of the node's density and of the densities of its axis neighbours whose links are open (not fully covered,
-/// not obstacles, not beyond a wall); every other share gets zero. A density `rho` holds (not negative) is
-/// taken from it, any other gathered from `src`: the values are the same either way (a gather is a pure
-/// function of `src`), so neither the cache nor any split of the nodes changes a bit.
+/// ΩΛ's wall gradients ([`SolidShare::wall_gradient`]) of the covered nodes `nodes` (node k has the shares
+/// `shares[offsets[k] − offsets[0] .. offsets[k + 1] − offsets[0]]`, the open links `links[k]`, and each
+/// share s the unit normal `normals[s − offsets[0]]` of its solid's surface), from the populations `src` in
+/// `layout` as the step about to run will gather them: at a partly covered node (0 < Σε <
+/// 1 − [`super::collide::LAMBDA_FULL_GAP`], not an obstacle) each share gets
+/// [`super::collide::wall_gradient`] of the node's density and of the densities of its axis neighbours whose
+/// links are open (not fully covered, not obstacles, not beyond a wall); every other share gets zero. Reads
+/// only `src`, so any split of the nodes gives the same values.
 #[allow(clippy::too_many_arguments)]
 pub fn wall_gradients<T: Real>(
     domain: &Domain<'_, T>,
     src: &[T],
     layout: Layout,
-    (all_nodes, rho, k0): (&[u32], &[T], usize),
+    nodes: &[u32],
     offsets: &[u32],
     links: &[OpenLinks],
     normals: &[[T; 2]],
     shares: &mut [SolidShare<T>],
 ) {
-    let shape = &domain.shape;
-    let periodic = domain.bc.periodic_axes();
+    let (shape, bc, flags) = (&domain.shape, &domain.bc, domain.flags);
+    let periodic = bc.periodic_axes();
     let first = offsets.first().copied().unwrap_or(0) as usize;
-    // The density of node j, from the cache where it holds it (`at` its index in `all_nodes`, if known).
-    let density_of = |j: usize, at: Option<usize>| {
-        let at = at.or_else(|| {
-            let i = all_nodes.partition_point(|&m| (m as usize) < j);
-            (all_nodes.get(i).map(|&m| m as usize) == Some(j)).then_some(i)
-        });
-        match at.and_then(|i| rho.get(i)) {
-            Some(&r) if r >= T::zero() => r,
-            _ => gathered_density(domain, src, layout, j),
-        }
+    let rho_at = |n: usize| {
+        let (x, y) = shape.coords(n);
+        density(&gather_node_in(
+            shape,
+            src,
+            layout,
+            bc,
+            &domain.profiles,
+            flags,
+            x,
+            y,
+        ))
     };
-    for k in 0..offsets.len().saturating_sub(1) {
+    for (k, &node) in nodes.iter().enumerate() {
         let (a, b) = (offsets[k] as usize - first, offsets[k + 1] as usize - first);
-        let kk = k0 + k;
-        let n = all_nodes[kk] as usize;
-        if !wall_partial(domain.flags[n], &shares[a..b]) {
+        let n = node as usize;
+        let mut eps_sum = T::zero();
+        for s in &shares[a..b] {
+            eps_sum += s.fraction;
+        }
+        let partial = flags[n] != SOLID
+            && eps_sum > T::zero()
+            && !super::collide::lambda_fully_covered(eps_sum);
+        if !partial {
             for s in &mut shares[a..b] {
                 s.wall_gradient = [T::zero(); 2];
             }
             continue;
         }
         let (x, y) = shape.coords(n);
-        let here = density_of(n, Some(kk));
+        let rho = rho_at(n);
         let neighbours: [Option<T>; 4] = core::array::from_fn(|i| {
             let q = i + 1;
             if links[k] & (1 << q) == 0 {
                 return None;
             }
             match shape.neighbour(x, y, q, periodic) {
-                Neighbour::Node(j) => {
-                    // The list is sorted: a covered neighbour along x is usually the next or previous entry.
-                    let near = [kk.wrapping_sub(1), kk + 1]
-                        .into_iter()
-                        .find(|&i| all_nodes.get(i).is_some_and(|&m| m as usize == j));
-                    Some(density_of(j, near))
-                }
+                Neighbour::Node(j) => Some(rho_at(j)),
                 _ => None,
             }
         });
         for (s, normal) in shares[a..b].iter_mut().zip(&normals[a..b]) {
-            s.wall_gradient = super::collide::wall_gradient(here, neighbours, *normal);
+            s.wall_gradient = super::collide::wall_gradient(rho, neighbours, *normal);
         }
     }
 }
