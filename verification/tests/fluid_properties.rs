@@ -31,9 +31,9 @@ use lbdem_kernels::fluid::d2q9::{density, equilibrium, momentum, second_moment, 
 use lbdem_kernels::fluid::lattice::{LatticeShape, Side};
 use lbdem_kernels::fluid::step::{
     band_mut, classify_special_nodes, collide_covered_list, collide_covered_nodes,
-    collide_planned_row, gather_node, gathered_moments, nodes_in_rows, open_links,
-    plan_covered_row, planes, planes_mut, step_band, stream_periodic, wall_gradients, CoveredNodes,
-    Domain, FluidParams, FLUID, PLAN_GROUPS, SOLID,
+    collide_planned_row, gather_node, gathered_densities, gathered_moments, nodes_in_rows,
+    open_links, plan_covered_row, planes, planes_mut, step_band, stream_periodic, wall_gradients,
+    CoveredNodes, Domain, FluidParams, FLUID, PLAN_GROUPS, SOLID,
 };
 use lbdem_kernels::Real;
 use lbdem_reference::analytic;
@@ -730,15 +730,17 @@ fn kernel_step<T: Real>(
             let count = (offsets[k + 1] - offsets[k]) as usize;
             normals.extend((0..count).map(|j| test_normal(n, j).map(T::lit)));
         }
+        // The densities as the driver takes them: gathered row by row, the special nodes one by one.
+        let mut rho = vec![T::nan(); shape.nodes()];
+        gathered_densities(&domain, &src, Layout::Collided, 0, ny, &special, &mut rho);
         wall_gradients(
             &domain,
-            &src,
-            Layout::Collided,
             &nodes,
             &offsets,
             &links,
             &normals,
             &mut shares,
+            |n| rho[n],
         );
     }
     let mut exchange = vec![[T::nan(); 2]; shares.len()];

@@ -45,13 +45,14 @@ use lbdem_kernels::fluid::boundary::{
 };
 use lbdem_kernels::fluid::collide::{
     guo_source, lambda_fully_covered, lambda_weighting, lane_class, Collision, LaneClass,
-    PsmParams, Rates, SolidOperator, SolidShare, Trt, Weighting, LAMBDA_FULL_GAP,
+    OpenLinks, PsmParams, Rates, SolidOperator, SolidShare, Trt, Weighting, LAMBDA_FULL_GAP,
 };
 use lbdem_kernels::fluid::d2q9::{density, equilibrium, momentum, velocity, Q};
 use lbdem_kernels::fluid::lattice::{wrap_row, LatticeShape};
 use lbdem_kernels::fluid::step::{
     band_mut, bulk_band, classify_special_nodes, fix_special_nodes, gather_node, gather_node_in,
-    nodes_in_rows, planes_mut, Domain, FluidParams, FLUID, SOLID,
+    gathered_densities, nodes_in_rows, open_links, planes_mut, wall_gradients, Domain, FluidParams,
+    FLUID, SOLID,
 };
 use lbdem_kernels::math::{norm, perp, rotate, rotate_by, rotation, vector};
 use lbdem_reference::lbm as reference;
@@ -438,6 +439,60 @@ fn to_reference(l: &Lattice) -> (reference::Lattice, reference::Sides) {
     (lat, sides)
 }
 
+/// The in-place scheme's streamed layout of `l`'s populations, from its definition: node x's post-collision
+/// P_i sits at (ī, x + c_i), or at (i, x) where x + c_i is solid or outside a side that is not periodic
+/// (`periodic` = [along x, along y]). Obstacle nodes hold nothing that streams (NaN where nothing lands).
+fn streamed_buffer(l: &Lattice, periodic: [bool; 2]) -> Vec<f64> {
+    let shape = l.shape;
+    let (nx, ny) = (shape.nx, shape.ny);
+    let mut streamed = vec![f64::NAN; shape.buffer_len()];
+    for y in 0..ny {
+        for x in 0..nx {
+            let n = shape.index(x, y);
+            if l.flags[n] == SOLID {
+                continue;
+            }
+            for q in 0..Q {
+                let c = velocity::<f64>(q);
+                let (tx, ty) = (x as i64 + c[0] as i64, y as i64 + c[1] as i64);
+                let outside_x = !(0..nx as i64).contains(&tx) && !periodic[0];
+                let outside_y = !(0..ny as i64).contains(&ty) && !periodic[1];
+                let target = if outside_x || outside_y {
+                    None
+                } else {
+                    let t = shape.index(
+                        tx.rem_euclid(nx as i64) as usize,
+                        ty.rem_euclid(ny as i64) as usize,
+                    );
+                    (l.flags[t] != SOLID).then_some(t)
+                };
+                match target {
+                    Some(t) => {
+                        streamed[shape.offset(lbdem_kernels::fluid::d2q9::OPPOSITE[q], t)] =
+                            l.f[n][q]
+                    }
+                    None => streamed[shape.offset(q, n)] = l.f[n][q],
+                }
+            }
+        }
+    }
+    streamed
+}
+
+/// A side condition for a side that is not periodic: a wall at rest, a moving wall, or a Zou–He pressure or
+/// velocity side (mild values, so the closures stay well inside their range).
+fn random_closed_side(s: &mut u64) -> SideCondition<f64> {
+    let u = [0.1 * splitmix(s) - 0.05, 0.1 * splitmix(s) - 0.05];
+    match (4.0 * splitmix(s)) as usize {
+        0 => SideCondition::Wall,
+        1 => SideCondition::MovingWall { velocity: u },
+        2 => SideCondition::Pressure {
+            density: 0.95 + 0.1 * splitmix(s),
+        },
+        _ => SideCondition::Velocity { velocity: u },
+    }
+}
+
 const NO_PROFILES: SideProfiles<'static, f64> = SideProfiles {
     west: &[],
     east: &[],
@@ -522,38 +577,7 @@ proptest! {
         let l = random_lattice(nx, ny, seed, walls, p_solid);
         let shape = l.shape;
         let collided = to_buffer(&shape, &l.f);
-        let mut streamed = vec![f64::NAN; shape.buffer_len()];
-        for y in 0..ny {
-            for x in 0..nx {
-                let n = shape.index(x, y);
-                if l.flags[n] == SOLID {
-                    // Obstacle nodes hold nothing that streams.
-                    continue;
-                }
-                for q in 0..Q {
-                    let c = velocity::<f64>(q);
-                    let (tx, ty) = (x as i64 + c[0] as i64, y as i64 + c[1] as i64);
-                    let outside_x = !(0..nx as i64).contains(&tx) && walls[0];
-                    let outside_y = !(0..ny as i64).contains(&ty) && walls[1];
-                    let target = if outside_x || outside_y {
-                        None
-                    } else {
-                        let t = shape.index(
-                            tx.rem_euclid(nx as i64) as usize,
-                            ty.rem_euclid(ny as i64) as usize,
-                        );
-                        (l.flags[t] != SOLID).then_some(t)
-                    };
-                    match target {
-                        Some(t) => {
-                            streamed[shape.offset(lbdem_kernels::fluid::d2q9::OPPOSITE[q], t)] =
-                                l.f[n][q]
-                        }
-                        None => streamed[shape.offset(q, n)] = l.f[n][q],
-                    }
-                }
-            }
-        }
+        let streamed = streamed_buffer(&l, [!walls[0], !walls[1]]);
         for y in 0..ny {
             for x in 0..nx {
                 if l.flags[shape.index(x, y)] == SOLID {
@@ -566,6 +590,88 @@ proptest! {
                     prop_assert_eq!(a[q].to_bits(), b[q].to_bits(), "({}, {}) q {}", x, y, q);
                     prop_assert_eq!(b[q].to_bits(), c[q].to_bits());
                 }
+            }
+        }
+    }
+
+    /// `gathered_densities` over any rows of a lattice with walls, moving walls, Zou–He sides and obstacles,
+    /// in either layout of the in-place scheme: bitwise the density of `gather_node_in` (the general gather,
+    /// itself checked against the reference above and in `fluid_properties.rs`) at every node that is not an
+    /// obstacle, 1 at obstacles; and `wall_gradients` reading those densities gives bitwise what it gives
+    /// gathering each node, for random covered nodes, shares, links and normals.
+    #[test]
+    fn gathered_densities_are_the_general_gathers_densities(
+        nx in 1usize..=9,
+        ny in 1usize..=9,
+        seed in any::<u64>(),
+        closed in any::<[bool; 2]>(),
+        p_solid in prop_oneof![Just(0.0), 0.0f64..0.3],
+        rows in any::<[usize; 2]>(),
+    ) {
+        let mut l = random_lattice(nx, ny, seed, [false; 2], p_solid);
+        let mut s = seed ^ 0x5eed;
+        let mut side = |c: bool| if c { random_closed_side(&mut s) } else { SideCondition::Periodic };
+        l.bc = Boundaries { west: side(closed[0]), east: side(closed[0]), south: side(closed[1]), north: side(closed[1]) };
+        // Opposite sides closed alike, each drawn on its own.
+        let shape = l.shape;
+        let collided = to_buffer(&shape, &l.f);
+        let streamed = streamed_buffer(&l, [!closed[0], !closed[1]]);
+        let mut special = vec![0u32; shape.nodes()];
+        let count = classify_special_nodes(&shape, &l.bc, &l.flags, &mut special);
+        special.truncate(count);
+        let domain = Domain { shape, bc: l.bc, profiles: NO_PROFILES, flags: &l.flags };
+        let (y0, y1) = {
+            let (a, b) = (rows[0] % (ny + 1), rows[1] % (ny + 1));
+            (a.min(b), a.max(b))
+        };
+        for (layout, buf) in [(Layout::Collided, &collided), (Layout::Streamed, &streamed)] {
+            let mut out = vec![f64::NAN; (y1 - y0) * nx];
+            gathered_densities(&domain, buf, layout, y0, y1, nodes_in_rows(&shape, &special, y0, y1), &mut out);
+            for y in y0..y1 {
+                for x in 0..nx {
+                    let n = shape.index(x, y);
+                    let want = if l.flags[n] == SOLID {
+                        1.0
+                    } else {
+                        density(&gather_node_in(&shape, buf, layout, &l.bc, &NO_PROFILES, &l.flags, x, y))
+                    };
+                    prop_assert_eq!(out[(y - y0) * nx + x].to_bits(), want.to_bits(), "{:?} ({}, {})", layout, x, y);
+                }
+            }
+            // The wall gradients from the whole lattice's densities against gathering node by node.
+            let mut all = vec![f64::NAN; shape.nodes()];
+            gathered_densities(&domain, buf, layout, 0, ny, &special, &mut all);
+            let nodes: Vec<u32> = (0..shape.nodes() as u32).filter(|_| splitmix(&mut s) < 0.5).collect();
+            let mut offsets = vec![0u32];
+            let mut shares = Vec::new();
+            let mut normals = Vec::new();
+            for _ in &nodes {
+                for _ in 0..1 + (2.0 * splitmix(&mut s)) as usize {
+                    shares.push(SolidShare { fraction: 0.6 * splitmix(&mut s), velocity: [0.0; 2], wall_gradient: [f64::NAN; 2] });
+                    let a = 2.0 * PI * splitmix(&mut s);
+                    normals.push([a.cos(), a.sin()]);
+                }
+                offsets.push(shares.len() as u32);
+            }
+            // Open links as the driver finds them (obstacles and sides closed), some closed at random as full
+            // cover would.
+            let links: Vec<OpenLinks> = nodes
+                .iter()
+                .map(|&n| {
+                    let (x, y) = shape.coords(n as usize);
+                    open_links(&shape, &l.bc, &l.flags, x, y, |_| false) & (splitmix(&mut s) * 512.0) as OpenLinks
+                })
+                .collect();
+            let mut by_buffer = shares.clone();
+            wall_gradients(&domain, &nodes, &offsets, &links, &normals, &mut by_buffer, |n| all[n]);
+            let mut by_gather = shares.clone();
+            wall_gradients(&domain, &nodes, &offsets, &links, &normals, &mut by_gather, |n| {
+                let (x, y) = shape.coords(n);
+                density(&gather_node_in(&shape, buf, layout, &l.bc, &NO_PROFILES, &l.flags, x, y))
+            });
+            for (a, b) in by_buffer.iter().zip(&by_gather) {
+                prop_assert_eq!(a.wall_gradient.map(f64::to_bits), b.wall_gradient.map(f64::to_bits));
+                prop_assert!(a.wall_gradient.iter().all(|g| g.is_finite()));
             }
         }
     }

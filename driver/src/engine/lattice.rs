@@ -24,9 +24,9 @@ use lbdem_kernels::fluid::d2q9::{equilibrium, OPPOSITE, Q};
 use lbdem_kernels::fluid::lattice::{LatticeShape, Side};
 use lbdem_kernels::fluid::step::{
     classify_special_nodes, collide_covered_nodes, collide_planned_row, covered_node_value,
-    fix_special_nodes, gather_node_in, gathered_moments_in, nodes_in_rows, open_links,
-    plan_covered_row, planes_mut, special_node_value, wall_gradients, CoveredNodes, Domain,
-    FluidParams, FLUID, PLAN_GROUPS, SOLID,
+    fix_special_nodes, gather_node_in, gathered_densities, gathered_moments_in, nodes_in_rows,
+    open_links, plan_covered_row, planes_mut, special_node_value, wall_gradients, CoveredNodes,
+    Domain, FluidParams, FLUID, PLAN_GROUPS, SOLID,
 };
 use lbdem_kernels::math::{Point, Vector};
 use lbdem_kernels::Real;
@@ -115,6 +115,9 @@ pub struct FluidLattice<T: Real> {
     covered_plans: Vec<CoveredPlan>,
     /// How many band plans were made (for tests).
     covered_plans_made: u64,
+    /// ΩΛ's wall-pressure form: the gathered density of each node of the rows around covered nodes, filled
+    /// before each step ([`gathered_densities`]; one entry per node, other rows stale).
+    densities: Vec<T>,
 }
 
 /// What a band's covered-row plans depend on: the coverage's lists and fractions, the special-node list (the
@@ -1089,6 +1092,7 @@ impl<T: Real> FluidLattice<T> {
             special_id: 0,
             covered_plans: Vec::new(),
             covered_plans_made: 0,
+            densities: Vec::new(),
         };
         lattice.reclassify();
         lattice.fill_equilibrium(|_, _| (T::one(), [T::zero(); 2]));
@@ -2183,8 +2187,11 @@ impl<T: Real> FluidLattice<T> {
     }
 
     /// ΩΛ's wall gradients of the covered nodes ([`wall_gradients`]) from the populations the step about to run
-    /// gathers, in parallel over chunks of covered nodes (each node reads only the buffer, so the values do not
-    /// depend on the chunks or the thread count). Nothing for the other operators, which do not read them.
+    /// gathers: first the gathered densities of the rows from one above the first covered node's row to one
+    /// below the last's (every row when that range wraps a periodic axis), in parallel over bands of rows
+    /// ([`gathered_densities`]), then the gradients in parallel over chunks of covered nodes, reading those
+    /// densities. Each value depends only on the buffer, so nothing depends on the bands, chunks or thread
+    /// count. Nothing for the other operators, which do not read them.
     fn update_wall_gradients(&mut self) {
         const CHUNK: usize = 1024;
         if self.solid_operator != SolidOperator::LambdaConsistent
@@ -2211,6 +2218,38 @@ impl<T: Real> FluidLattice<T> {
                 .for_each(|s| s.wall_gradient = [T::zero(); 2]);
             return;
         }
+        let (Some(&first), Some(&last)) = (cov.nodes.first(), cov.nodes.last()) else {
+            return;
+        };
+        let (nx, ny) = (self.shape.nx, self.shape.ny);
+        let (top, bottom) = (first as usize / nx, last as usize / nx);
+        // Rows whose densities a gradient may read: the covered rows and one on each side (a neighbour across
+        // a periodic side wraps to the far row: then all rows).
+        let (y0, y1) = if (top == 0 || bottom + 1 == ny) && self.bc.periodic_axes()[1] {
+            (0, ny)
+        } else {
+            (top.saturating_sub(1), (bottom + 2).min(ny))
+        };
+        self.densities.resize(self.shape.nodes(), T::zero());
+        let (shape, special) = (self.shape, &self.special);
+        let band = self.band_rows.max(1) * nx;
+        self.densities[y0 * nx..y1 * nx]
+            .par_chunks_mut(band)
+            .enumerate()
+            .for_each(|(b, out)| {
+                let r0 = y0 + b * self.band_rows.max(1);
+                let r1 = r0 + out.len() / nx;
+                gathered_densities(
+                    &domain,
+                    src,
+                    layout,
+                    r0,
+                    r1,
+                    nodes_in_rows(&shape, special, r0, r1),
+                    out,
+                );
+            });
+        let densities = &self.densities;
         let (nodes, offsets, links, normals) = (&cov.nodes, &cov.offsets, &cov.links, &cov.normals);
         let mut work = Vec::with_capacity(nodes.len().div_ceil(CHUNK));
         let mut rest = &mut cov.shares[..];
@@ -2225,13 +2264,12 @@ impl<T: Real> FluidLattice<T> {
             let (a, b) = (offsets[k0] as usize, offsets[k1] as usize);
             wall_gradients(
                 &domain,
-                src,
-                layout,
                 &nodes[k0..k1],
                 &offsets[k0..=k1],
                 &links[k0..k1],
                 &normals[a..b],
                 shares,
+                |n| densities[n],
             );
         });
     }

@@ -1149,41 +1149,112 @@ pub fn open_links<T: Real>(
     open
 }
 
-/// ΩΛ's wall gradients ([`SolidShare::wall_gradient`]) of the covered nodes `nodes` (node k has the shares
-/// `shares[offsets[k] − offsets[0] .. offsets[k + 1] − offsets[0]]`, the open links `links[k]`, and each
-/// share s the unit normal `normals[s − offsets[0]]` of its solid's surface), from the populations `src` in
-/// `layout` as the step about to run will gather them: at a partly covered node (0 < Σε <
-/// 1 − [`super::collide::LAMBDA_FULL_GAP`], not an obstacle) each share gets
-/// [`super::collide::wall_gradient`] of the node's density and of the densities of its axis neighbours whose
-/// links are open (not fully covered, not obstacles, not beyond a wall); every other share gets zero. Reads
-/// only `src`, so any split of the nodes gives the same values.
-#[allow(clippy::too_many_arguments)]
-pub fn wall_gradients<T: Real>(
+/// The density of every node of rows `y0..y1` as the step about to run gathers it from `src` in `layout`:
+/// `out[(y − y0) nx + x]` = [`density`] of [`gather_node_in`] at (x, y), bitwise, for every node that is not
+/// a solid obstacle (which gets 1, like [`gathered_moments_in`]). `special` must be the part of the
+/// [`classify_special_nodes`] list that lies in the rows (sorted), and `out` at least `(y1 − y0) nx` long.
+///
+/// The rows are summed branch-free, as the bulk pass streams them (periodic pull in [`Layout::Collided`], the
+/// node's own reversed slots in [`Layout::Streamed`]); only the special nodes, where that differs from the
+/// general gather, are gathered one by one. So a whole band costs about a read-only sweep of its rows, where
+/// gathering node by node costs nine scattered loads (and nine flag checks) per node. Reads only `src`.
+pub fn gathered_densities<T: Real>(
     domain: &Domain<'_, T>,
     src: &[T],
     layout: Layout,
+    y0: usize,
+    y1: usize,
+    special: &[u32],
+    out: &mut [T],
+) {
+    let shape = &domain.shape;
+    let nx = shape.nx;
+    let s = planes(shape, src);
+    for y in y0..y1 {
+        let row = &mut out[(y - y0) * nx..(y - y0 + 1) * nx];
+        match layout {
+            Layout::Collided => {
+                for x in [0, nx - 1] {
+                    row[x] = density(&pull_periodic(shape, &s, x, y));
+                }
+                if nx < 3 {
+                    continue;
+                }
+                let n = nx - 2;
+                let r0 = y * nx;
+                let rm = wrap_row(y, -1, shape.ny) * nx;
+                let rp = wrap_row(y, 1, shape.ny) * nx;
+                // f_i(x) = src_i(x − c_i) for x in 1..nx−1, as in [`bulk_rows`].
+                let s0 = &s[0][r0 + 1..r0 + 1 + n];
+                let s1 = &s[1][r0..r0 + n];
+                let s2 = &s[2][rm + 1..rm + 1 + n];
+                let s3 = &s[3][r0 + 2..r0 + 2 + n];
+                let s4 = &s[4][rp + 1..rp + 1 + n];
+                let s5 = &s[5][rm..rm + n];
+                let s6 = &s[6][rm + 2..rm + 2 + n];
+                let s7 = &s[7][rp + 2..rp + 2 + n];
+                let s8 = &s[8][rp..rp + n];
+                for (k, r) in row[1..1 + n].iter_mut().enumerate() {
+                    *r = density(&[
+                        s0[k], s1[k], s2[k], s3[k], s4[k], s5[k], s6[k], s7[k], s8[k],
+                    ]);
+                }
+            }
+            Layout::Streamed => {
+                // f_q(x) sits in slot q̄ of x itself (see [`gather_node_in`]).
+                let r0 = y * nx;
+                let p: [&[T]; Q] = core::array::from_fn(|q| &s[OPPOSITE[q]][r0..r0 + nx]);
+                for (k, r) in row.iter_mut().enumerate() {
+                    *r = density(&[
+                        p[0][k], p[1][k], p[2][k], p[3][k], p[4][k], p[5][k], p[6][k], p[7][k],
+                        p[8][k],
+                    ]);
+                }
+            }
+        }
+    }
+    for &n in special {
+        let n = n as usize;
+        let (x, y) = shape.coords(n);
+        out[(y - y0) * nx + x] = if domain.flags[n] == SOLID {
+            T::one()
+        } else {
+            density(&gather_node_in(
+                shape,
+                src,
+                layout,
+                &domain.bc,
+                &domain.profiles,
+                domain.flags,
+                x,
+                y,
+            ))
+        };
+    }
+}
+
+/// ΩΛ's wall gradients ([`SolidShare::wall_gradient`]) of the covered nodes `nodes` (node k has the shares
+/// `shares[offsets[k] − offsets[0] .. offsets[k + 1] − offsets[0]]`, the open links `links[k]`, and each
+/// share s the unit normal `normals[s − offsets[0]]` of its solid's surface), from `rho_at(n)`, the density
+/// of node n as the step about to run gathers it ([`gathered_densities`], or the density of
+/// [`gather_node_in`]): at a partly covered node (0 < Σε < 1 − [`super::collide::LAMBDA_FULL_GAP`], not an
+/// obstacle) each share gets [`super::collide::wall_gradient`] of the node's density and of the densities of
+/// its axis neighbours whose links are open (not fully covered, not obstacles, not beyond a wall); every
+/// other share gets zero. `rho_at` is asked only for those nodes. Any split of the nodes gives the same
+/// values.
+#[allow(clippy::too_many_arguments)]
+pub fn wall_gradients<T: Real>(
+    domain: &Domain<'_, T>,
     nodes: &[u32],
     offsets: &[u32],
     links: &[OpenLinks],
     normals: &[[T; 2]],
     shares: &mut [SolidShare<T>],
+    rho_at: impl Fn(usize) -> T,
 ) {
     let (shape, bc, flags) = (&domain.shape, &domain.bc, domain.flags);
     let periodic = bc.periodic_axes();
     let first = offsets.first().copied().unwrap_or(0) as usize;
-    let rho_at = |n: usize| {
-        let (x, y) = shape.coords(n);
-        density(&gather_node_in(
-            shape,
-            src,
-            layout,
-            bc,
-            &domain.profiles,
-            flags,
-            x,
-            y,
-        ))
-    };
     for (k, &node) in nodes.iter().enumerate() {
         let (a, b) = (offsets[k] as usize - first, offsets[k + 1] as usize - first);
         let n = node as usize;
