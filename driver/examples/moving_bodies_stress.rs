@@ -22,8 +22,25 @@ use lbdem_kernels::fluid::collide::{Collision, LambdaTerms, SolidOperator, Trt, 
 use lbdem_kernels::fluid::step::FluidParams;
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
+/// Print `msg` with the usage and exit with status 2 (bad arguments).
+fn fail(msg: &str) -> ! {
+    eprintln!(
+        "moving_bodies_stress: {msg}\nusage: OP FORM OVERLAP OBSTACLES VMAX VFIRST MISMATCH SEEDS [TAU] [INSIDE] [ONLY_SEED|x] [SIDES] (see the file's doc)"
+    );
+    std::process::exit(2)
+}
+
+/// Argument `i` as a finite number, or exit naming it.
+fn number<N: std::str::FromStr>(a: &[String], i: usize, name: &str) -> N {
+    a[i].parse()
+        .unwrap_or_else(|_| fail(&format!("{name} = {:?} is not a number", a[i])))
+}
+
 fn main() {
     let a: Vec<String> = std::env::args().collect();
+    if a.len() < 9 {
+        fail("too few arguments");
+    }
     let op = match a[1].as_str() {
         "lambda" => SolidOperator::LambdaConsistent,
         "lin" => SolidOperator::LinearizedNonEquilibriumBounceBack,
@@ -36,11 +53,24 @@ fn main() {
     };
     let overlap = a[3] == "1";
     let obstacles = a[4] == "1";
-    let vmax: f64 = a[5].parse().unwrap();
-    let vfirst: f64 = a[6].parse().unwrap();
+    let vmax: f64 = number(&a, 5, "VMAX");
+    let vfirst: f64 = number(&a, 6, "VFIRST");
     let mismatch = a[7] == "1";
-    let seeds: u64 = a[8].parse().unwrap();
-    let tau: f64 = a.get(9).map_or(0.9, |s| s.parse().unwrap());
+    let seeds: u64 = number(&a, 8, "SEEDS");
+    let tau: f64 = if a.len() > 9 {
+        number(&a, 9, "TAU")
+    } else {
+        0.9
+    };
+    if !(vmax.is_finite()
+        && vmax >= 0.0
+        && vfirst.is_finite()
+        && vfirst >= 0.0
+        && tau > 0.5
+        && tau.is_finite())
+    {
+        fail("VMAX and VFIRST must be finite and >= 0, TAU finite and > 0.5");
+    }
     let inside = a.get(10).is_some_and(|s| s == "1");
     let only: Option<u64> = a.get(11).and_then(|s| s.parse().ok());
     let bcmode = a.get(12).cloned().unwrap_or_else(|| "zh".into());

@@ -400,6 +400,28 @@ fn pull_periodic<T: Real>(shape: &LatticeShape, src: &[&[T]; Q], x: usize, y: us
     ]
 }
 
+/// The source slices of row y's interior nodes under the periodic pull, each exactly nx − 2 long: element k of
+/// slice i is src_i(x − c_i) at x = k + 1 (the bulk pass's streaming; requires nx ≥ 3).
+#[inline(always)]
+fn pull_row<'a, T>(shape: &LatticeShape, s: &[&'a [T]; Q], y: usize) -> [&'a [T]; Q] {
+    let nx = shape.nx;
+    let n = nx - 2;
+    let r0 = y * nx;
+    let rm = wrap_row(y, -1, shape.ny) * nx;
+    let rp = wrap_row(y, 1, shape.ny) * nx;
+    [
+        &s[0][r0 + 1..r0 + 1 + n],
+        &s[1][r0..r0 + n],
+        &s[2][rm + 1..rm + 1 + n],
+        &s[3][r0 + 2..r0 + 2 + n],
+        &s[4][rp + 1..rp + 1 + n],
+        &s[5][rm..rm + n],
+        &s[6][rm + 2..rm + 2 + n],
+        &s[7][rp + 2..rp + 2 + n],
+        &s[8][rp..rp + n],
+    ]
+}
+
 /// The branch-free bulk pass over rows `y0..y1`: periodic pull + `collide` for every node, written into the
 /// band `dst` (each plane slice holds rows y0..y1). `collide` is applied in place to the gathered populations.
 #[inline(always)]
@@ -430,19 +452,7 @@ pub fn bulk_rows<T: Real, C: Fn(&mut [T; Q])>(
             continue;
         }
         let n = nx - 2;
-        let r0 = y * nx;
-        let rm = wrap_row(y, -1, shape.ny) * nx;
-        let rp = wrap_row(y, 1, shape.ny) * nx;
-        // Source slices, each exactly n long: f_i(x) = src_i(x − c_i) for x in 1..nx−1.
-        let s0 = &s[0][r0 + 1..r0 + 1 + n];
-        let s1 = &s[1][r0..r0 + n];
-        let s2 = &s[2][rm + 1..rm + 1 + n];
-        let s3 = &s[3][r0 + 2..r0 + 2 + n];
-        let s4 = &s[4][rp + 1..rp + 1 + n];
-        let s5 = &s[5][rm..rm + n];
-        let s6 = &s[6][rm + 2..rm + 2 + n];
-        let s7 = &s[7][rp + 2..rp + 2 + n];
-        let s8 = &s[8][rp..rp + n];
+        let [s0, s1, s2, s3, s4, s5, s6, s7, s8] = pull_row(shape, &s, y);
         let [d0, d1, d2, d3, d4, d5, d6, d7, d8] = dst;
         let d0 = &mut d0[row + 1..row + 1 + n];
         let d1 = &mut d1[row + 1..row + 1 + n];
@@ -1181,19 +1191,8 @@ pub fn gathered_densities<T: Real>(
                     continue;
                 }
                 let n = nx - 2;
-                let r0 = y * nx;
-                let rm = wrap_row(y, -1, shape.ny) * nx;
-                let rp = wrap_row(y, 1, shape.ny) * nx;
-                // f_i(x) = src_i(x − c_i) for x in 1..nx−1, as in [`bulk_rows`].
-                let s0 = &s[0][r0 + 1..r0 + 1 + n];
-                let s1 = &s[1][r0..r0 + n];
-                let s2 = &s[2][rm + 1..rm + 1 + n];
-                let s3 = &s[3][r0 + 2..r0 + 2 + n];
-                let s4 = &s[4][rp + 1..rp + 1 + n];
-                let s5 = &s[5][rm..rm + n];
-                let s6 = &s[6][rm + 2..rm + 2 + n];
-                let s7 = &s[7][rp + 2..rp + 2 + n];
-                let s8 = &s[8][rp..rp + n];
+                // The bulk pass's pull ([`pull_row`]).
+                let [s0, s1, s2, s3, s4, s5, s6, s7, s8] = pull_row(shape, &s, y);
                 for (k, r) in row[1..1 + n].iter_mut().enumerate() {
                     *r = density(&[
                         s0[k], s1[k], s2[k], s3[k], s4[k], s5[k], s6[k], s7[k], s8[k],
