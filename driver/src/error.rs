@@ -38,7 +38,7 @@ pub enum LbdemError {
         hint: String,
     },
     /// The run produced a non-finite or out-of-band value and was stopped.
-    #[error("run stopped at step {step}: {quantity} = {value} at node ({x}, {y}); outputs written so far are kept in {out}\n  hint: {hint}")]
+    #[error("run stopped at step {step}: {quantity} = {value}{}; outputs written so far are kept in {out}\n  hint: {hint}", at_node(*.x, *.y))]
     Diverged {
         /// Step at which the check failed.
         step: u64,
@@ -46,9 +46,9 @@ pub enum LbdemError {
         quantity: String,
         /// Its value.
         value: String,
-        /// Node x.
+        /// Node x ([`NO_NODE`] for a quantity not of one node: a mean, a flux, a boundary's velocity).
         x: usize,
-        /// Node y.
+        /// Node y ([`NO_NODE`] likewise).
         y: usize,
         /// Output directory.
         out: String,
@@ -169,6 +169,19 @@ impl LbdemError {
 }
 
 /// Result alias of the driver.
+/// The node of a [`LbdemError::Diverged`] whose quantity belongs to no node (a mean pressure, a flux, the sealed
+/// lid's velocity): its message then names no node.
+pub const NO_NODE: usize = usize::MAX;
+
+/// " at node (x, y)" for a [`LbdemError::Diverged`] message, nothing for [`NO_NODE`].
+fn at_node(x: usize, y: usize) -> String {
+    if x == NO_NODE || y == NO_NODE {
+        String::new()
+    } else {
+        format!(" at node ({x}, {y})")
+    }
+}
+
 pub type Result<T> = std::result::Result<T, LbdemError>;
 
 /// Check that a scene value is finite and > 0, naming the field and giving a hint otherwise.

@@ -228,15 +228,23 @@ fn lambda_consistent_with_light_free_grains_at_high_tau_is_refused_and_near_the_
     }
     assert!(warned(&warnings(&with(&light, "tau", "1.0"))));
     assert!(!warned(&warnings(&with(&light, "tau", "0.8"))));
-    // 1.4 × the fluid (measured for 1.25: stable to 1.2, diverged at 2): refused at 2, warned at 1.5, silent
-    // at 1.2.
+    // 1.4 × the fluid in the friction-only form (measured for 1.25: stable to 1.2, diverged at 2): refused at
+    // 2, warned at 1.5, silent at 1.2. In the wall-pressure form (the default) a lone grain of 1.25 was stable
+    // at every τ measured: silent at 2.
     let mid = with(&tv, "grain_density", "1.4");
+    let mid_friction = with_form(&mid, "friction_only");
     refused_by_both(
-        &with(&mid, "tau", "2.0"),
+        &with(&mid_friction, "tau", "2.0"),
         "terminal_velocity.solid_operator",
     );
-    assert!(warned(&warnings(&with(&mid, "tau", "1.5"))));
-    assert!(!warned(&warnings(&with(&mid, "tau", "1.2"))));
+    assert!(warned(&warnings(&with(&mid_friction, "tau", "1.5"))));
+    assert!(!warned(&warnings(&with(&mid_friction, "tau", "1.2"))));
+    assert!(!warned(&warnings(&with(&mid, "tau", "2.0"))));
+    // Neutrally buoyant grains diverged at 1.2 in both forms.
+    refused_by_both(
+        &with(&with_form(&light, "friction_only"), "tau", "1.2"),
+        "terminal_velocity.solid_operator",
+    );
     // Rock grains (2.65) at τ = 2: no warning.
     assert!(!warned(&warnings(&with(&tv, "tau", "2.0"))));
 }
@@ -308,12 +316,14 @@ fn free_grain_kinds_default_to_trt_and_lambda_consistent_where_stable_and_fall_b
     assert_eq!(fs.collision_default, lbdem::units::CollisionName::Trt);
 }
 
-/// ΩΛ with a **pack** of free grains has its own stability map (`LAMBDA_PACKED_GRAIN_STABILITY`): in the
-/// Terzaghi column (free discs in contact) TRT + ΩΛ with grains twice as dense as the fluid was stable at
-/// τ = 1.6 and diverged at 2, where a lone disc of that density is stable to τ = 2; rock grains (2.65) were
-/// stable to 2 in the pack. So for the kinds that make a pack, ΩΛ named with such grains is refused from τ = 2
-/// and warned above 1.6, and the default falls back to Ω₁ₗ + BGK above 1.6 with a warning; a lone grain keeps
-/// its map, and a rock pack takes ΩΛ at every τ measured.
+/// ΩΛ with a **pack** of free grains has its own stability map, one per form. In the Terzaghi column (free discs
+/// in contact), friction-only form (`LAMBDA_PACKED_GRAIN_STABILITY`): grains twice as dense as the fluid stable
+/// at τ = 1.6, diverged at 2, where a lone disc of that density is stable to τ = 2. Wall-pressure form, the
+/// default (`LAMBDA_WALL_PACKED_GRAIN_STABILITY`): those grains stable at τ = 2 (three seeds), grains 1.5 × the
+/// fluid stable at 1.4 and diverged at 1.6. Rock grains (2.65) were stable to 2 in both. So for the kinds that
+/// make a pack, ΩΛ named is refused from the map's first diverged τ and warned above its last stable one, and the
+/// default falls back to Ω₁ₗ + BGK above the last stable τ with a warning; a lone grain keeps its map, and a
+/// rock pack takes ΩΛ at every τ measured.
 #[test]
 fn lambda_consistent_with_packed_grains_follows_the_pack_map() {
     use lbdem::kinds::consolidation::{self, Consolidation};
@@ -328,22 +338,54 @@ fn lambda_consistent_with_packed_grains_follows_the_pack_map() {
         "record_interval = 0.25   # s",
         "solid_operator = \"lambda_consistent\"",
     );
-    let tz2 = with(&tz, "grain_density", "2.0");
-    let e = refused_by_both(&with(&tz2, "viscosity", "0.5"), "terzaghi.solid_operator");
-    assert!(e.contains("pack") && e.contains("fluid.tau"), "{e}");
     let warnings = |text: &str| {
         Case::<Terzaghi>::read(text, "t.toml")
             .unwrap()
             .setup
             .warnings
     };
-    assert!(warned(&warnings(&with(&tz2, "viscosity", "0.4"))));
-    assert!(!warned(&warnings(&with(&tz2, "viscosity", "0.35"))));
-    // Rock grains: ΩΛ at τ = 2 without a warning.
+    // Friction-only form, grains 2 × the fluid: refused at τ = 2, warned at 1.7, silent at 1.55.
+    let tz2 = with(&tz, "grain_density", "2.0");
+    let tz2_friction = with_form(&tz2, "friction_only");
+    let e = refused_by_both(
+        &with(&tz2_friction, "viscosity", "0.5"),
+        "terzaghi.solid_operator",
+    );
+    assert!(
+        e.contains("pack") && e.contains("friction-only") && e.contains("fluid.tau"),
+        "{e}"
+    );
+    assert!(warned(&warnings(&with(&tz2_friction, "viscosity", "0.4"))));
+    assert!(!warned(&warnings(&with(
+        &tz2_friction,
+        "viscosity",
+        "0.35"
+    ))));
+    // Wall-pressure form (the default): the same grains silent at τ = 2; grains 1.5 × the fluid refused at
+    // τ = 1.6, warned at 1.5, silent at 1.37.
+    assert!(!warned(&warnings(&with(&tz2, "viscosity", "0.5"))));
+    let tz15 = with(&tz, "grain_density", "1.5");
+    let e = refused_by_both(
+        &with(&tz15, "viscosity", "0.36666667"),
+        "terzaghi.solid_operator",
+    );
+    assert!(
+        e.contains("pack") && e.contains("wall-pressure") && e.contains("fluid.tau"),
+        "{e}"
+    );
+    assert!(warned(&warnings(&with(&tz15, "viscosity", "0.33333333"))));
+    assert!(!warned(&warnings(&with(&tz15, "viscosity", "0.29"))));
+    // Rock grains: ΩΛ at τ = 2 without a warning, in both forms.
     assert!(!warned(&warnings(&with(&tz, "viscosity", "0.5"))));
+    assert!(!warned(&warnings(&with(
+        &with_form(&tz, "friction_only"),
+        "viscosity",
+        "0.5"
+    ))));
     // Consolidation names no operator: TRT + ΩΛ at τ = 0.8 (the bundled scene) and, with rock grains, at
-    // τ = 2; with grains twice as dense as the fluid Ω₁ₗ + BGK with a warning at τ = 1.7, where a lone grain of
-    // that density would still get ΩΛ.
+    // τ = 2; with grains 1.5 × the fluid Ω₁ₗ + BGK with a warning at τ = 1.7 (wall-pressure form), where a lone
+    // grain of that density would still get ΩΛ; with grains twice as dense ΩΛ at 1.7 in the wall-pressure form,
+    // Ω₁ₗ + BGK in the friction-only form (whose form key is then refused).
     let choice = |text: &str| {
         let case = Case::<Consolidation>::read(text, "c.toml").unwrap();
         let mut w = lbdem::units::Warnings::default();
@@ -357,8 +399,12 @@ fn lambda_consistent_with_packed_grains_follows_the_pack_map() {
     );
     assert_eq!(choice(&cs).0, lambda);
     assert_eq!(choice(&with(&cs, "viscosity", "0.5")).0, lambda);
+    let cs2 = with(&with(&cs, "grain_density", "2.0"), "viscosity", "0.4");
+    assert_eq!(choice(&cs2), (lambda, vec![]));
+    // In the friction-only form the default there is Ω₁ₗ + BGK, which has no form: the form key is refused.
+    refused_by_both(&with_form(&cs2, "friction_only"), "fluid.lambda_form");
     let (c, w) = choice(&with(
-        &with(&cs, "grain_density", "2.0"),
+        &with(&cs, "grain_density", "1.5"),
         "viscosity",
         "0.4",
     ));
@@ -376,7 +422,7 @@ fn lambda_consistent_with_packed_grains_follows_the_pack_map() {
     );
     // A lone grain of that density at the same τ: ΩΛ, no warning (the free-disc map).
     let tv = with(
-        &with(&scene("terminal_velocity.toml"), "grain_density", "2.0"),
+        &with(&scene("terminal_velocity.toml"), "grain_density", "1.5"),
         "tau",
         "1.7",
     );

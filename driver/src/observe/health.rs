@@ -74,8 +74,8 @@ pub fn finite(quantity: &str, value: f64, step: u64, hint: &str) -> Result<f64> 
             step,
             quantity: quantity.into(),
             value: format!("{value}"),
-            x: 0,
-            y: 0,
+            x: crate::error::NO_NODE,
+            y: crate::error::NO_NODE,
             out: String::new(),
             hint: hint.into(),
         })

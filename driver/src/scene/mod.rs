@@ -396,30 +396,51 @@ pub(crate) fn whole_spacings(field: &str, length: f64, h: f64) -> Result<usize> 
 
 pub use crate::input::parse::{kind_field, parse_scene, peek_kind, read_scene_text, KindField};
 
-/// Where ΩΛ with a free grain was measured stable and where it diverged (κ = 1.21, full-cover gap 0.05; the
-/// free disc of `scenes/terminal_velocity.toml`, radius 10 nodes, Re ≈ 0.1;
-/// `cargo run --release -p lbdem --example moving_table -- --stability 1,1.25,1.5,2,2.65`):
-/// (lowest grain/fluid density ratio of the row, largest τ measured stable, smallest τ measured to diverge).
-/// ρs/ρf = 1: stable to τ = 0.8, diverged from 1.2; 1.25: stable to 1.2, diverged at 2; 1.5, 2 and 2.65:
-/// stable to 2 (the largest τ measured). (With the earlier full-cover gap of 1e-3: ρs/ρf = 1 diverged from
-/// 0.8 and 1.5 at 2.)
+/// Where ΩΛ **in its friction-only form** (`fluid.lambda_form = "friction_only"`) with a free grain was measured
+/// stable and where it diverged (κ = 1.21, full-cover gap 0.05; the free disc of `scenes/terminal_velocity.toml`,
+/// radius 10 nodes, Re ≈ 0.1; `cargo run --release -p lbdem --example moving_table -- --stability
+/// 1,1.25,1.5,2,2.65`): (lowest grain/fluid density ratio of the row, largest τ measured stable, smallest τ
+/// measured to diverge). ρs/ρf = 1: stable to τ = 0.8, diverged from 1.2; 1.25: stable to 1.2, diverged at 2;
+/// 1.5, 2 and 2.65: stable to 2 (the largest τ measured). (With the earlier full-cover gap of 1e-3: ρs/ρf = 1
+/// diverged from 0.8 and 1.5 at 2.) The wall-pressure form's map: [`LAMBDA_WALL_FREE_GRAIN_STABILITY`].
 pub const LAMBDA_FREE_GRAIN_STABILITY: [(f64, f64, f64); 3] =
     [(0.0, 0.8, 1.2), (1.25, 1.2, 2.0), (1.5, 2.0, f64::INFINITY)];
 
-/// As [`LAMBDA_FREE_GRAIN_STABILITY`] for grains **packed** against each other (the kinds that make a pack:
-/// `fracture`, `consolidation`, `terzaghi`). Measured with TRT + ΩΛ on `scenes/terzaghi.toml` shortened to 5 s
-/// (77 free discs of 3.2–4.8 fluid nodes in radius in contact; τ changed through the viscosity; the grains'
-/// density changed; a run is stable when it reaches its end): ρs/ρf = 1 stable to τ = 0.6, diverged at 0.8;
-/// 1.25 stable to 0.8, diverged at 1; 1.5 stable to 1.2, diverged at 1.6; 2 stable to 1.6, diverged at 2;
-/// 2.65 (rock) stable at 0.8, 1.2, 1.4 and 2 (three seeds at 2), as was the quick fracture scene's bonded
-/// ellipse pack at τ = 2. A pack is less stable than a lone grain of the same density: with the earlier
-/// full-cover gap of 1e-3 a rock pack diverged from τ = 1.25 (`LAMBDA_FULL_GAP` gives the mode).
+/// As [`LAMBDA_FREE_GRAIN_STABILITY`] (the friction-only form) for grains **packed** against each other (the
+/// kinds that make a pack: `fracture`, `consolidation`, `terzaghi`). Measured with TRT + ΩΛ on
+/// `scenes/terzaghi.toml` shortened to 5 s (77 free discs of 3.2–4.8 fluid nodes in radius in contact; τ
+/// changed through the viscosity; the grains' density changed; a run is stable when it reaches its end):
+/// ρs/ρf = 1 stable to τ = 0.6, diverged at 0.8; 1.25 stable to 0.8, diverged at 1; 1.5 stable to 1.2, diverged
+/// at 1.6; 2 stable to 1.6, diverged at 2; 2.65 (rock) stable at 0.8, 1.2, 1.4 and 2 (three seeds at 2), as was
+/// the quick fracture scene's bonded ellipse pack at τ = 2. A pack is less stable than a lone grain of the same
+/// density: with the earlier full-cover gap of 1e-3 a rock pack diverged from τ = 1.25 (`LAMBDA_FULL_GAP` gives
+/// the mode). The wall-pressure form's map: [`LAMBDA_WALL_PACKED_GRAIN_STABILITY`].
 pub const LAMBDA_PACKED_GRAIN_STABILITY: [(f64, f64, f64); 5] = [
     (0.0, 0.6, 0.8),
     (1.25, 0.8, 1.0),
     (1.5, 1.2, 1.6),
     (2.0, 1.6, 2.0),
     (2.65, 2.0, f64::INFINITY),
+];
+
+/// As [`LAMBDA_FREE_GRAIN_STABILITY`] for ΩΛ's **wall-pressure form** (the default; κ = 0.5, α = 2), measured
+/// the same way (`moving_table -- --stability 1,1.25,1.5,2,2.65`, 2026-12-07): ρs/ρf = 1 stable to τ = 0.8,
+/// diverged at 1.2 and 2; 1.25, 1.5, 2 and 2.65 stable at every τ measured (0.55, 0.8, 1.2, 2), where the
+/// friction-only form diverged with 1.25 at τ = 2.
+pub const LAMBDA_WALL_FREE_GRAIN_STABILITY: [(f64, f64, f64); 2] =
+    [(0.0, 0.8, 1.2), (1.25, 2.0, f64::INFINITY)];
+
+/// As [`LAMBDA_PACKED_GRAIN_STABILITY`] for ΩΛ's **wall-pressure form** (the default), measured the same way
+/// (the Terzaghi column shortened to 5 s, seed 7 unless said; README, *The pack map in the wall-pressure
+/// form*): ρs/ρf = 1 stable at τ = 0.6 and 0.7, diverged at 0.8 and 1; 1.25 stable to 1.0 (seeds 7, 8, 9),
+/// diverged at 1.2; 1.5 stable at 1.2 and 1.4, diverged at 1.6 and 2; 2 stable at 1.6, 1.8 and 2 (seeds 7,
+/// 8, 9); rock stable at 0.8, 1.4 and 2 (seeds 7 and 9). Where the two forms differ the wall-pressure form is
+/// the more stable (1.25 at τ = 1, 2 at τ = 2: both diverged in the friction-only form).
+pub const LAMBDA_WALL_PACKED_GRAIN_STABILITY: [(f64, f64, f64); 4] = [
+    (0.0, 0.7, 0.8),
+    (1.25, 1.0, 1.2),
+    (1.5, 1.4, 1.6),
+    (2.0, 2.0, f64::INFINITY),
 ];
 
 /// The free grains of a scene, for the choice and the check of its solid operator: the lightest grain's
@@ -432,6 +453,9 @@ pub struct FreeGrains {
     pub density_ratio: f64,
     /// Grains packed in contact (true) or lone in fluid (false).
     pub packed: bool,
+    /// ΩΛ's form the scene runs (`[fluid] lambda_form`; the wall-pressure form when absent): each form has its
+    /// own stability maps.
+    pub form: crate::units::LambdaForm,
 }
 
 impl FreeGrains {
@@ -440,6 +464,7 @@ impl FreeGrains {
         Self {
             density_ratio,
             packed: false,
+            form: crate::units::LambdaForm::WallPressure,
         }
     }
 
@@ -448,17 +473,48 @@ impl FreeGrains {
         Self {
             density_ratio,
             packed: true,
+            form: crate::units::LambdaForm::WallPressure,
+        }
+    }
+
+    /// These grains in ΩΛ's form `form` (a scene's `[fluid] lambda_form`; `None` = the wall-pressure form, the
+    /// default).
+    pub fn in_form(self, form: Option<crate::units::LambdaForm>) -> Self {
+        Self {
+            form: form.unwrap_or(crate::units::LambdaForm::WallPressure),
+            ..self
+        }
+    }
+
+    /// The stability map of these grains (lone or packed) in their form, and what it was measured on.
+    fn lambda_map(&self) -> (&'static [(f64, f64, f64)], &'static str) {
+        use crate::units::LambdaForm;
+        match (self.form, self.packed) {
+            (LambdaForm::WallPressure, true) => (
+                &LAMBDA_WALL_PACKED_GRAIN_STABILITY,
+                "measured in packs of free discs in the wall-pressure form (README, *The pack map in the \
+                 wall-pressure form*: scenes/terzaghi.toml with TRT + Omega_Lambda)",
+            ),
+            (LambdaForm::WallPressure, false) => (
+                &LAMBDA_WALL_FREE_GRAIN_STABILITY,
+                "measured with a free disc in the wall-pressure form (README, moving solids)",
+            ),
+            (LambdaForm::FrictionOnly, true) => (
+                &LAMBDA_PACKED_GRAIN_STABILITY,
+                "measured in packs of free discs in the friction-only form (README, *A pack is less stable \
+                 than a lone disc*: scenes/terzaghi.toml with TRT + Omega_Lambda)",
+            ),
+            (LambdaForm::FrictionOnly, false) => (
+                &LAMBDA_FREE_GRAIN_STABILITY,
+                "measured with a free disc in the friction-only form (README, moving solids)",
+            ),
         }
     }
 
     /// The row of ΩΛ's stability map for these grains: (lowest density ratio of the row, largest τ measured
     /// stable, smallest τ measured to diverge).
     fn lambda_row(&self) -> (f64, f64, f64) {
-        let map: &[(f64, f64, f64)] = if self.packed {
-            &LAMBDA_PACKED_GRAIN_STABILITY
-        } else {
-            &LAMBDA_FREE_GRAIN_STABILITY
-        };
+        let (map, _) = self.lambda_map();
         map.iter()
             .rev()
             .find(|r| self.density_ratio >= r.0)
@@ -469,18 +525,7 @@ impl FreeGrains {
     /// Where ΩΛ's limits for these grains were measured, for messages: the rows of the map in use, written
     /// from the table itself (so the message cannot drift from what is enforced).
     fn lambda_measured(&self) -> String {
-        let (map, what): (&[(f64, f64, f64)], &str) = if self.packed {
-            (
-                &LAMBDA_PACKED_GRAIN_STABILITY,
-                "measured in packs of free discs (README, *A pack is less stable than a lone disc*: \
-                 scenes/terzaghi.toml with TRT + Omega_Lambda)",
-            )
-        } else {
-            (
-                &LAMBDA_FREE_GRAIN_STABILITY,
-                "measured with a free disc (README, moving solids)",
-            )
-        };
+        let (map, what) = self.lambda_map();
         let rows: Vec<String> = map
             .iter()
             .map(|&(density, stable, diverged)| {

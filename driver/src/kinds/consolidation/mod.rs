@@ -68,7 +68,7 @@ pub fn fluid_choice(
     free_grain_choice(
         c.solid_operator,
         tau,
-        FreeGrains::packed(c.grain_density / scene.fluid.density),
+        FreeGrains::packed(c.grain_density / scene.fluid.density).in_form(scene.fluid.lambda_form),
         warnings,
     )
 }
@@ -425,7 +425,8 @@ impl Kind for Consolidation {
         UnitsSetup::with_free_grains(
             &scene.fluid,
             "consolidation.solid_operator",
-            FreeGrains::packed(scene.consolidation.grain_density / scene.fluid.density),
+            FreeGrains::packed(scene.consolidation.grain_density / scene.fluid.density)
+                .in_form(scene.fluid.lambda_form),
             |tau, w| fluid_choice(scene, tau, w),
         )
     }

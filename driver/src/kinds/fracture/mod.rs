@@ -306,7 +306,7 @@ impl FractureScene {
         free_grain_choice(
             f.solid_operator,
             tau,
-            FreeGrains::packed(self.packing.density / f.density),
+            FreeGrains::packed(self.packing.density / f.density).in_form(f.section().lambda_form),
             warnings,
         )
     }
@@ -431,7 +431,7 @@ impl FractureScene {
             &f.section(),
             choice,
             units.tau,
-            FreeGrains::packed(self.packing.density / f.density),
+            FreeGrains::packed(self.packing.density / f.density).in_form(f.section().lambda_form),
             warnings,
         )?;
         let h = f.spacing;

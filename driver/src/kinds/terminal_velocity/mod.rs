@@ -58,7 +58,7 @@ pub fn fluid_choice(
     free_grain_choice(
         t.solid_operator,
         tau,
-        FreeGrains::lone(t.grain_density / scene.fluid.density),
+        FreeGrains::lone(t.grain_density / scene.fluid.density).in_form(scene.fluid.lambda_form),
         warnings,
     )
 }
@@ -510,7 +510,8 @@ impl Kind for TerminalVelocity {
         UnitsSetup::with_free_grains(
             &scene.fluid,
             "terminal_velocity.solid_operator",
-            FreeGrains::lone(scene.terminal_velocity.grain_density / scene.fluid.density),
+            FreeGrains::lone(scene.terminal_velocity.grain_density / scene.fluid.density)
+                .in_form(scene.fluid.lambda_form),
             |tau, w| fluid_choice(scene, tau, w),
         )
     }

@@ -87,6 +87,16 @@ const HINT_LAMBDA: &str =
                            of free grains diverged at high tau, the sooner the lighter the grains), or use \
                            solid_operator = \"linearized_non_equilibrium_bounce_back\"";
 
+/// What to change when the column of `world` diverges: [`HINT_LAMBDA`] under ΩΛ (raising τ is the wrong way
+/// there), else [`HINT`].
+fn divergence_hint(world: &CoupledWorld) -> &'static str {
+    if world.fluid.solid_operator() == SolidOperator::LambdaConsistent {
+        HINT_LAMBDA
+    } else {
+        HINT
+    }
+}
+
 mod sealed;
 pub use sealed::SealedMeasurement;
 use sealed::{SealedRun, SEALED_FREE_ROWS};
@@ -112,7 +122,8 @@ pub fn fluid_choice(
         given => free_grain_choice(
             given,
             tau,
-            FreeGrains::packed(c.grain_density / scene.fluid.density),
+            FreeGrains::packed(c.grain_density / scene.fluid.density)
+                .in_form(scene.fluid.lambda_form),
             warnings,
         ),
     }
@@ -1154,7 +1165,7 @@ impl TerzaghiState {
                 c.isotropic_stress + c.load,
                 nx,
                 self.pack_rows,
-                HINT,
+                divergence_hint(&run.world),
             )?;
             if run.done() {
                 let p = &self.prediction;
@@ -1250,7 +1261,10 @@ impl TerzaghiState {
                 for (y, mean, _) in rows {
                     let p = u.pressure_to_physical(CS2 * (mean - 1.0)) / load;
                     let depth = self.prediction.thickness - (y as f64 + 0.5) * u.spacing;
-                    out.push([depth, finite("pore pressure", p, s, HINT)?]);
+                    out.push([
+                        depth,
+                        finite("pore pressure", p, s, divergence_hint(&self.world))?,
+                    ]);
                 }
                 let settlement = self.layer_start.map_or(f64::NAN, |y0| {
                     y0 - layer_height(&self.world.dem, &self.loaded)
@@ -1618,7 +1632,8 @@ impl Kind for Terzaghi {
         let mut setup = UnitsSetup::with_free_grains(
             &scene.fluid,
             "terzaghi.solid_operator",
-            FreeGrains::packed(scene.terzaghi.grain_density / scene.fluid.density),
+            FreeGrains::packed(scene.terzaghi.grain_density / scene.fluid.density)
+                .in_form(scene.fluid.lambda_form),
             |tau, w| fluid_choice(scene, tau, w),
         )?;
         let c = &scene.terzaghi;
@@ -1697,12 +1712,7 @@ impl Kind for Terzaghi {
     fn health(_case: &Case<Self>, state: &TerzaghiState) -> Result<()> {
         // Under ΩΛ a pack of free grains diverges at high τ (README, *A pack is less stable than a lone disc*):
         // there raising τ is the wrong way.
-        let hint = if state.world.fluid.solid_operator() == SolidOperator::LambdaConsistent {
-            HINT_LAMBDA
-        } else {
-            HINT
-        };
-        coupled_health(&state.world, hint)
+        coupled_health(&state.world, divergence_hint(&state.world))
     }
 
     fn write_outputs(

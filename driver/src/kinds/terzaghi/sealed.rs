@@ -29,7 +29,7 @@ use lbdem_reference::poroelastic::{biot_modulus, loading_efficiency};
 
 use super::{layer_height, layer_mean, LoadDashpot};
 use crate::engine::coupled::CoupledWorld;
-use crate::error::Result;
+use crate::error::{LbdemError, Result};
 use crate::observe::flow::fluid_row_means;
 use crate::observe::health::finite;
 use crate::units::{LatticeUnits, CS2};
@@ -48,6 +48,26 @@ pub const SEALED_CROSSINGS: f64 = 20.0;
 pub const SEALED_WINDOW: f64 = 8.0;
 /// Samples of the pore pressure per sound-crossing time in the window.
 const SAMPLES_PER_CROSSING: f64 = 4.0;
+
+/// The sealed lid's velocity `v` (lattice units, the loaded layer's mean vertical velocity at step `step`) as a
+/// velocity profile takes it: finite and below the lattice speed 1. Anything else is the column diverging,
+/// reported as [`LbdemError::Diverged`] with `hint` (the side's own check would name a scene field,
+/// `boundary.north.profile`, that no scene has).
+fn lid_speed(v: f64, step: u64, hint: &str) -> Result<f64> {
+    if v.is_finite() && v.abs() < 1.0 {
+        return Ok(v);
+    }
+    Err(LbdemError::Diverged {
+        step,
+        quantity: "sealed lid velocity (the loaded layer's mean vertical velocity, lattice units)"
+            .into(),
+        value: format!("{v}"),
+        x: crate::error::NO_NODE,
+        y: crate::error::NO_NODE,
+        out: String::new(),
+        hint: hint.into(),
+    })
+}
 
 /// What the sealed column measured (`prediction.sealed` in `summary.json`). Stresses and lengths physical.
 #[derive(Clone, Debug, Serialize, Deserialize)]
@@ -148,6 +168,9 @@ impl SealedRun {
             // populations it keeps) is taken off the layer's load.
             // The loaded layer's vertical velocity, weighted as its height is.
             let v = u.velocity_to_lattice(layer_mean(&self.world.dem, loaded, |g| g.velocity[1]));
+            // A lid at or above the lattice speed (or not finite) is the column diverging, not a bad profile:
+            // say so (the side's own check would name a scene field the user never wrote).
+            lid_speed(v, s, hint)?;
             lid.fill([0.0, v]);
             self.world.fluid.set_side_profile(Side::North, &lid)?;
             let known = self
@@ -244,6 +267,39 @@ impl SealedRun {
             pressure_spread: self.spread,
             pressure_drift: (half(&self.halves[1]) - half(&self.halves[0])) / p,
             steps: self.s,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_lid_at_the_lattice_speed_is_divergence_not_a_bad_scene_field() {
+        assert_eq!(lid_speed(-0.25, 3, "h").unwrap(), -0.25);
+        for v in [1.0, -1.5, f64::NAN, f64::INFINITY] {
+            let e = lid_speed(v, 7, "lower fluid.tau");
+            // A lid's velocity is no node's: the message names none.
+            let text = e.as_ref().map_err(|e| e.to_string()).unwrap_err();
+            assert!(
+                text.contains("run stopped at step 7: sealed lid velocity")
+                    && !text.contains("at node"),
+                "{text}"
+            );
+            match e {
+                Err(LbdemError::Diverged {
+                    step,
+                    quantity,
+                    hint,
+                    ..
+                }) => {
+                    assert_eq!(step, 7);
+                    assert!(quantity.contains("sealed lid velocity"), "{quantity}");
+                    assert_eq!(hint, "lower fluid.tau");
+                }
+                other => panic!("v = {v}: {other:?}"),
+            }
         }
     }
 }
