@@ -182,3 +182,64 @@ fn incremental_remapping_is_bitwise_a_full_remapping_in_the_coupled_step() {
     incremental_remapping_leaves_the_coupled_step_unchanged::<f64>();
     incremental_remapping_leaves_the_coupled_step_unchanged::<f32>();
 }
+
+/// A fluid divergence with grains reaching past the lattice's non-periodic sides says so in its hint (every
+/// solid operator was measured to diverge where solids sweep through a wall or Zou–He side: README, *ΩΛ's
+/// wall-pressure form*); without such grains the hint is the kind's alone. `drifting_ellipses`' grain 7
+/// straddles the west (Zou–He pressure) side: centre x = 1.5, semi-major 5 × 0.8 at 2.8 rad, so it reaches
+/// about 2.3 spacings past x = 0.
+#[test]
+fn a_divergence_names_grains_that_cross_the_lattices_sides() {
+    use lbdem::error::LbdemError;
+    use lbdem::observe::health::{coupled_health, grains_past_sides, SIDE_CROSSING_MARGIN};
+    use lbdem_kernels::fluid::lattice::Side;
+    let hint_of = |world: &mut CoupledWorld| {
+        world.map_grains();
+        assert!(coupled_health(world, "kind's hint").is_ok());
+        world.fluid.populations_mut()[5 * 9] = f64::NAN;
+        match coupled_health(world, "kind's hint") {
+            Err(LbdemError::Diverged { hint, .. }) => hint,
+            other => panic!("{other:?}"),
+        }
+    };
+    let mut world = drifting_ellipses::<f64>();
+    let hint = hint_of(&mut world);
+    assert!(
+        hint.starts_with("kind's hint; 1 grain(s) reach past the lattice's sides")
+            && hint.contains("grain 7 past the west side (Zou-He pressure)"),
+        "{hint}"
+    );
+    // Grain 7 moved inside: the kind's hint alone.
+    let mut inside = drifting_ellipses::<f64>();
+    inside.dem.particles[7].position[0] = 20.0;
+    inside.dem.particles[7].position[1] = 20.0;
+    assert_eq!(hint_of(&mut inside), "kind's hint");
+    // The margin: a disc of radius 3 whose edge lies just inside / just beyond SIDE_CROSSING_MARGIN past the
+    // edge of the cells (x = −0.5) of a walled south side and a periodic west side.
+    use lbdem_kernels::coupling::{BodyShape, CoupledBody};
+    use lbdem_kernels::fluid::boundary::{Boundaries, SideCondition};
+    let bc = Boundaries::<f64> {
+        west: SideCondition::Periodic,
+        east: SideCondition::Periodic,
+        south: SideCondition::Wall,
+        north: SideCondition::Wall,
+    };
+    let disc = |x: f64, y: f64| CoupledBody {
+        center: lbdem_kernels::math::vector(x, y),
+        velocity: lbdem_kernels::math::vector(0.0, 0.0),
+        spin: 0.0,
+        shape: BodyShape::Disc { radius: 3.0 },
+    };
+    let edge = 3.0 - 0.5 - SIDE_CROSSING_MARGIN;
+    let bodies = [
+        disc(10.0, edge + 1e-9),
+        disc(10.0, edge - 1e-9),
+        disc(-5.0, 10.0),
+        disc(10.0, 39.0 - edge + 1e-9),
+        disc(10.0, 39.0 - edge - 1e-9),
+    ];
+    assert_eq!(
+        grains_past_sides(&bodies, &bc, 20, 40),
+        vec![(1, Side::South), (3, Side::North)]
+    );
+}

@@ -1381,7 +1381,10 @@ impl<'a, S: std::ops::DerefMut<Target = FractureState>> FractureRun<'a, S> {
                                 x,
                                 y,
                                 out: String::new(),
-                                hint: "lower loading.pressure_drop, or refine fluid.timestep (a higher sound speed lowers the lattice density drop)".into(),
+                                hint: format!(
+                                    "lower loading.pressure_drop, or refine fluid.timestep (a higher sound speed lowers the lattice density drop){}",
+                                    crate::observe::health::side_crossings(fp.world)
+                                ),
                             });
                         }
                         // Pore fluid only: fully covered nodes hold the fluid inside grains, which takes no part
