@@ -70,27 +70,11 @@ pub fn coupled_health<T: Real>(world: &CoupledWorld<T>, hint: &str) -> Result<()
 
 /// `e` with [`side_crossings`]' note for `world` added to its hint, when `e` is a divergence (the note is made
 /// only then: a healthy check costs nothing more).
-pub fn with_side_crossings<T: Real>(e: LbdemError, world: &CoupledWorld<T>) -> LbdemError {
-    match e {
-        LbdemError::Diverged {
-            step,
-            quantity,
-            value,
-            x,
-            y,
-            out,
-            hint,
-        } => LbdemError::Diverged {
-            step,
-            quantity,
-            value,
-            x,
-            y,
-            out,
-            hint: format!("{hint}{}", side_crossings(world)),
-        },
-        other => other,
+pub fn with_side_crossings<T: Real>(mut e: LbdemError, world: &CoupledWorld<T>) -> LbdemError {
+    if let LbdemError::Diverged { hint, .. } = &mut e {
+        hint.push_str(&side_crossings(world));
     }
+    e
 }
 
 /// How far past the edge of a non-periodic side's cells (half a spacing outside its edge nodes) a grain must
