@@ -168,7 +168,6 @@ impl LbdemError {
     }
 }
 
-/// Result alias of the driver.
 /// The node of a [`LbdemError::Diverged`] whose quantity belongs to no node (a mean pressure, a flux, the sealed
 /// lid's velocity): its message then names no node.
 pub const NO_NODE: usize = usize::MAX;
@@ -182,6 +181,7 @@ fn at_node(x: usize, y: usize) -> String {
     }
 }
 
+/// Result alias of the driver.
 pub type Result<T> = std::result::Result<T, LbdemError>;
 
 /// Check that a scene value is finite and > 0, naming the field and giving a hint otherwise.

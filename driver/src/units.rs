@@ -117,12 +117,13 @@ pub struct FluidSection {
 
 /// The form of ΩΛ (`SolidOperator::LambdaConsistent`) a scene asks for (`[fluid] lambda_form`): which of ΩΛ's
 /// terms act at partly covered nodes ([`LambdaTerms`]).
-#[derive(Clone, Copy, Debug, Deserialize, Serialize, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, Default, Deserialize, Serialize, PartialEq, Eq)]
 #[serde(rename_all = "snake_case")]
 pub enum LambdaForm {
     /// Friction κ = 0.5 plus the wall-pressure force along each solid's surface
     /// ([`LambdaTerms::WALL_PRESSURE`]): the default, the square arrays within 1 % of Sangani & Acrivos at
     /// l = 40 nodes and every τ.
+    #[default]
     WallPressure,
     /// Friction κ = 1.21 alone ([`LambdaTerms::FRICTION_ONLY`]): ΩΛ's first form, the default until
     /// 2026-12-07; unstable in dense packs of partly covered throats (README, "ΩΛ's wall-pressure form").
@@ -155,7 +156,7 @@ pub fn describe_operator(op: SolidOperator, fluid: &FluidSection) -> Result<Stri
     if op != SolidOperator::LambdaConsistent {
         return Ok(op.name().to_string());
     }
-    let form = fluid.lambda_form.unwrap_or(LambdaForm::WallPressure);
+    let form = fluid.lambda_form.unwrap_or_default();
     Ok(format!(
         "{} ({}: kappa {}, alpha {})",
         op.name(),
@@ -303,7 +304,7 @@ impl FluidSection {
                 ),
                 "remove fluid.lambda_form, or set the scene's solid_operator = \"lambda_consistent\"",
             )),
-            form => Ok(form.unwrap_or(LambdaForm::WallPressure).terms()),
+            form => Ok(form.unwrap_or_default().terms()),
         }
     }
 

@@ -464,7 +464,7 @@ impl FreeGrains {
         Self {
             density_ratio,
             packed: false,
-            form: crate::units::LambdaForm::WallPressure,
+            form: crate::units::LambdaForm::default(),
         }
     }
 
@@ -473,7 +473,7 @@ impl FreeGrains {
         Self {
             density_ratio,
             packed: true,
-            form: crate::units::LambdaForm::WallPressure,
+            form: crate::units::LambdaForm::default(),
         }
     }
 
@@ -481,7 +481,7 @@ impl FreeGrains {
     /// default).
     pub fn in_form(self, form: Option<crate::units::LambdaForm>) -> Self {
         Self {
-            form: form.unwrap_or(crate::units::LambdaForm::WallPressure),
+            form: form.unwrap_or_default(),
             ..self
         }
     }
